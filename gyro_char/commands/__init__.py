@@ -1,0 +1,1 @@
+"""Subcommands of ``gyro-char``; each module registers its own parser."""
