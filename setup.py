@@ -1,4 +1,5 @@
-"""ament_python packaging for gyro_char.
+"""
+ament_python packaging for gyro_char.
 
 Runtime requirements are the numeric stack only: on a real ROS 2 Jazzy install rclpy and the
 message packages come from apt (see package.xml); the PyPI ROS wheels live in
@@ -37,7 +38,6 @@ setup(
     maintainer_email='gyro-char@example.com',
     description='Gyro/IMU characterization: swing-stand Kalman filter and Allan variance.',
     license='Apache-2.0',
-    tests_require=['pytest'],
     entry_points={
         'console_scripts': [
             f'{node} = {PACKAGE}.nodes.{node}:main' for node in NODES

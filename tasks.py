@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""One entry point for the README's two commands: ``demo`` and ``test``.
+"""
+One entry point for the README's two commands: ``demo`` and ``test``.
 
 Creates ``.venv`` beside this file on first use (Python 3.11 and the package registries are
 all it needs), installs the pinned requirements and the package in editable mode, then runs the

@@ -1,4 +1,5 @@
-"""The ``gyro-char`` command: one console script, one module per subcommand.
+"""
+The ``gyro-char`` command: one console script, one module per subcommand.
 
 Each module in ``gyro_char.commands`` provides ``register(subparsers)`` (adding its parser and
 setting ``func``) so that the subcommands stay independent. Bad usage or bad input leaves with
@@ -23,7 +24,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog='gyro-char', description=__doc__.splitlines()[0])
+    parser = _Parser(prog='gyro-char', description=__doc__.strip().splitlines()[0])
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', parser_class=_Parser)
     sub.required = True
     for name in SUBCOMMANDS:

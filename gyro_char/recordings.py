@@ -1,4 +1,5 @@
-"""The one in-memory record type shared by every source and estimator.
+"""
+The one in-memory record type shared by every source and estimator.
 
 A ``Recording`` is one sampled stream: float64 stamps in seconds and named float64 channels in
 SI units (``gyro_x`` rad/s, ``accel_x`` m/s^2, ``encoder`` rad). A swing run is two recordings

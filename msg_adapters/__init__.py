@@ -1,4 +1,5 @@
-"""ROS message <-> core arrays, duck-typed (attribute access only).
+"""
+ROS message <-> core arrays, duck-typed (attribute access only).
 
 The same functions serve live rclpy messages and rosbags-deserialized ones, so nothing here
 imports rclpy or a message package. Builders take the message class as an argument.

@@ -5,7 +5,8 @@ from msg_adapters.imu import stamp_seconds
 
 
 def joint_angle(msg: Any, joint: Union[str, int] = 0) -> Optional[Tuple[float, float]]:
-    """JointState -> (stamp s, position rad) of the joint chosen by name or index.
+    """
+    Return (stamp s, position rad) from a JointState, of the joint chosen by name or index.
 
     Returns None when the message does not carry that joint (a JointState may hold other
     joints); the caller counts such messages.
