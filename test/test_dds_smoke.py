@@ -21,7 +21,7 @@ from sensor_msgs.msg import Imu  # noqa: E402
 
 DOMAIN_ID = 11
 
-PUBLISHER = textwrap.dedent('''
+PUBLISHER = textwrap.dedent("""
     import time
     import rclpy
     from rclpy.qos import qos_profile_sensor_data
@@ -42,7 +42,7 @@ PUBLISHER = textwrap.dedent('''
         time.sleep(0.01)
     node.destroy_node()
     rclpy.try_shutdown()
-''')
+""")
 
 
 def _env() -> dict:
@@ -109,8 +109,8 @@ def _to_rosbags(store, msg):
     """Convert an rclpy Imu into the rosbags dataclass (field by field, as a bag would hold)."""
     types = store.types
     header = types['std_msgs/msg/Header'](
-        stamp=types['builtin_interfaces/msg/Time'](sec=msg.header.stamp.sec,
-                                                  nanosec=msg.header.stamp.nanosec),
+        stamp=types['builtin_interfaces/msg/Time'](
+            sec=msg.header.stamp.sec, nanosec=msg.header.stamp.nanosec),
         frame_id=msg.header.frame_id)
     quat = types['geometry_msgs/msg/Quaternion']
     vec = types['geometry_msgs/msg/Vector3']
