@@ -6,7 +6,7 @@ SI units (``gyro_x`` rad/s, ``accel_x`` m/s^2, ``encoder`` rad). A swing run is 
 (IMU and encoder) because the two streams have their own stamps; the core aligns them.
 """
 from dataclasses import dataclass, field
-from typing import Dict, List
+from typing import Dict, List, Optional, Union
 
 import numpy as np
 
@@ -53,3 +53,40 @@ class Recording:
         if self.t.size < 2:
             raise InputError(f'{self.source or "recording"}: fewer than 2 samples')
         return float(np.median(np.diff(self.t)))
+
+
+# --- reading and writing (implemented in gyro_char.ingest; imported lazily to avoid a cycle) ---
+
+def read_imu(path: str, topic: Optional[str] = None, quiet: bool = False) -> Recording:
+    """
+    Read IMU samples (``gyro_*`` rad/s, ``accel_*`` m/s^2, those present) from any input.
+
+    ``path`` is a ROS 2 bag directory (sqlite3 or mcap), a ``.mcap`` file, a ROS 1 ``.bag`` or a
+    CSV(.gz) as in DESIGN.md section 3. Stamps are ``header.stamp`` (bags) or ``t_s`` (CSV),
+    sanitised (``gyro_char.ingest.sanitize``) with every treatment counted in ``notes``.
+    """
+    from gyro_char.ingest.read import read_imu as _read_imu
+    return _read_imu(path, topic=topic, quiet=quiet)
+
+
+def read_encoder(path: str, topic: Optional[str] = None,
+                 joint: Union[str, int, None] = None, quiet: bool = False) -> Recording:
+    """
+    Read the stand's encoder angle (channel ``encoder``, rad) from any input.
+
+    Bags: ``sensor_msgs/JointState`` (joint by name or index, default the first) or
+    ``geometry_msgs/Vector3Stamped`` (x). CSV: column ``encoder_rad`` or ``encoder_deg``.
+    """
+    from gyro_char.ingest.read import read_encoder as _read_encoder
+    return _read_encoder(path, topic=topic, joint=joint, quiet=quiet)
+
+
+def write_bag(path: str, imu: Recording, encoder: Optional[Recording] = None, *,
+              storage: str = 'mcap', imu_topic: str = '/imu/data_raw',
+              encoder_topic: str = '/stand/joint_states', joint_name: str = 'stand_joint',
+              frame_id: str = 'imu_link', quiet: bool = True) -> None:
+    """Write a ROS 2 bag directory (``storage`` 'mcap' or 'sqlite3'): Imu and JointState."""
+    from gyro_char.ingest.bag_write import write_bag as _write_bag
+    _write_bag(path, imu, encoder, storage=storage, imu_topic=imu_topic,
+               encoder_topic=encoder_topic, joint_name=joint_name, frame_id=frame_id,
+               quiet=quiet)
