@@ -32,6 +32,7 @@ setup(
         'tqdm>=4.60',
         'rosbags>=0.10',
         'filterpy>=1.4',
+        'numba>=0.59',
     ],
     zip_safe=True,
     maintainer='gyro_char developers',
