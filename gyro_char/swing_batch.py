@@ -1,0 +1,180 @@
+"""
+The fast kernel of the swing filter: a square-root information filter (SRIF) over chunks.
+
+For this model (constant parameters; for the gyro, a random walk on X3 observed without white
+noise) the Kalman filter's state at the last sample is an exact linear function of
+theta = X(t_ref), and the filter's information about theta is a sum over measurement rows:
+
+- encoder sample i:   z_i            = g(tau_i) . theta + v_i,         var sigma_enc^2
+- gyro sample 0:      z_0            = g(tau_0) . theta + v_0,         var N^2 * GYRO_ANCHOR_S
+- gyro sample 1:      z_1            = g(tau_1) . theta + w_1,         var N^2 dt_1
+- gyro sample i >= 2: z_i - z_{i-1}  = (g_i - g_{i-1}) . theta + w_i, var N^2 dt_i
+
+(the random walk's increments w_i are independent). Each chunk of rows is folded into a 6x6
+upper-triangular factor by one LAPACK QR (Householder, numerically stable: no normal
+equations), so a 900 k-sample record costs a few tens of milliseconds and the per-chunk online
+path is the same code. The residual sum of squares is the factor's last diagonal element
+squared, which gives the noise level when it is not supplied. The state and covariance at the
+last sample are then X_N = M theta + e3 z_N, P_N = M P_theta M^T with M = Phi(tau_N) for the
+encoder and M = Phi(tau_N) - e3 g_N^T for the gyro (N >= 1), exactly what the recursive filter
+(``swing_kf.SwingKalman``) carries; tests check the two agree.
+"""
+from dataclasses import dataclass
+from typing import Optional, Tuple
+
+from gyro_char.swing_model import (
+    E3, FilterResult, GYRO_ANCHOR_S, prior_information_sqrt, regressor, scaling, TIME_SCALE_S,
+    transition)
+import numpy as np
+from scipy.linalg import solve_triangular
+
+ENCODER = 'encoder'
+GYRO = 'gyro'
+
+
+def encoder_rows(tau: np.ndarray, z: np.ndarray, period_s: float):
+    """Scaled regressor rows U (n x 5), observations y and sqrt-weights (unit noise)."""
+    a = (2.0 * np.pi / period_s) * tau
+    s = tau / TIME_SCALE_S
+    u = np.column_stack([np.cos(a), np.sin(a), np.ones_like(s), s, 0.5 * s * s])
+    return u, z, np.ones_like(z)
+
+
+def gyro_rows(tau: np.ndarray, z: np.ndarray, period_s: float, start_index: int,
+              prev: Optional[Tuple[float, float]]):
+    """
+    Rows for gyro samples ``start_index ...`` (see module doc), unit noise density.
+
+    ``prev`` is (tau, z) of the sample before this chunk (None when ``start_index`` is 0).
+    """
+    w = 2.0 * np.pi / period_s
+    # Pad with the previous sample (or a dummy one step back: its row is never used).
+    p_tau, p_z = prev if prev is not None else (tau[0] - 1.0, z[0])
+    t0 = np.concatenate([[p_tau], tau[:-1]])
+    z0 = np.concatenate([[p_z], z[:-1]])
+    dt = tau - t0
+    # Differences by product identities: no cancellation between nearby cos/sin values.
+    mid, half = 0.5 * w * (tau + t0), 0.5 * w * dt
+    sh = np.sin(half)
+    s1, s0 = tau / TIME_SCALE_S, t0 / TIME_SCALE_S
+    du = np.column_stack([-2.0 * np.sin(mid) * sh, 2.0 * np.cos(mid) * sh, np.zeros_like(dt),
+                          s1 - s0, 0.5 * (s1 + s0) * (s1 - s0)])
+    dz = z - z0
+    sw = 1.0 / np.sqrt(dt)
+    k = start_index + np.arange(len(tau))
+    if k[0] >= 2:
+        return du, dz, sw
+    # Samples 0 (anchor) and 1 are absolute rows; later samples are increments.
+    u_abs, _, _ = encoder_rows(tau, z, period_s)
+    absolute = k < 2
+    du[absolute] = u_abs[absolute]
+    dz[absolute] = z[absolute]
+    sw[k == 0] = 1.0 / np.sqrt(GYRO_ANCHOR_S)
+    return du, dz, sw
+
+
+class Srif:
+    """Square-root information (data only, unit noise) of the scaled parameters and the RSS."""
+
+    def __init__(self) -> None:
+        self.r = np.zeros((0, 6))
+        self.rows = 0
+
+    def add(self, u: np.ndarray, y: np.ndarray, sw: np.ndarray) -> None:
+        if len(y) == 0:
+            return
+        a = np.empty((len(y), 6))
+        a[:, :5] = u * sw[:, None]
+        a[:, 5] = y * sw
+        self.r = np.linalg.qr(np.vstack([self.r, a]), mode='r')
+        self.rows += len(y)
+
+    @property
+    def rss(self) -> float:
+        """Residual sum of squares of the data-only least-squares fit (unit noise)."""
+        return float(self.r[5, 5] ** 2) if self.r.shape[0] == 6 else 0.0
+
+    def noise_scale(self) -> Optional[float]:
+        """ML-style noise level from the residuals, RSS / (rows - 5); None if undetermined."""
+        if self.rows <= 5:
+            return None
+        return float(np.sqrt(self.rss / (self.rows - 5)))
+
+    def solve(self, noise: float) -> Tuple[np.ndarray, np.ndarray]:
+        """Return theta = X(t_ref) and its covariance, with the prior and data noise ``noise``."""
+        prior = np.zeros((5, 6))
+        prior[:, :5] = prior_information_sqrt()
+        r = np.linalg.qr(np.vstack([prior, self.r / noise]), mode='r')
+        r5 = r[:5, :5]
+        theta_u = solve_triangular(r5, r[:5, 5])
+        r_inv = solve_triangular(r5, np.eye(5))
+        d = scaling()
+        return theta_u / d, (r_inv @ r_inv.T) / np.outer(d, d)
+
+
+@dataclass
+class StreamState:
+    """What a filter needs beyond its factor: sample count, last (tau, z), noise setting."""
+
+    kind: str
+    noise: Optional[float]
+    count: int = 0
+    last_tau: float = float('nan')
+    last_z: float = float('nan')
+
+
+def fold(srif: Srif, st: StreamState, tau: np.ndarray, z: np.ndarray, period_s: float) -> None:
+    """Add one chunk of stamps (s after t_ref) and angles (rad) of one stream."""
+    if len(tau) == 0:
+        return
+    if st.kind == ENCODER:
+        srif.add(*encoder_rows(tau, z, period_s))
+    else:
+        prev = None if st.count == 0 else (st.last_tau, st.last_z)
+        srif.add(*gyro_rows(tau, z, period_s, st.count, prev))
+    st.count += len(tau)
+    st.last_tau, st.last_z = float(tau[-1]), float(z[-1])
+
+
+def result(srif: Srif, st: StreamState, period_s: float,
+           noise_override: Optional[float] = None) -> FilterResult:
+    """Return the filter's state and covariance at its last sample (module doc)."""
+    noise = noise_override if noise_override is not None else st.noise
+    estimated = noise is None
+    if estimated:
+        noise = srif.noise_scale() or 1.0
+    theta, p_theta = srif.solve(noise)
+    m = transition(st.last_tau, period_s)
+    x = m @ theta
+    if st.kind == GYRO and st.count >= 2:
+        g = regressor(st.last_tau, period_s)
+        m = m - np.outer(E3, g)
+        x = m @ theta + E3 * st.last_z
+    return FilterResult(x=x, P=m @ p_theta @ m.T, tau=st.last_tau, samples=st.count,
+                        noise=float(noise), noise_estimated=estimated)
+
+
+def run(kind: str, tau: np.ndarray, z: np.ndarray, period_s: float,
+        noise: Optional[float] = None, checkpoints: int = 0):
+    """
+    One filter over a whole record; returns (FilterResult, history).
+
+    ``history`` (when ``checkpoints`` > 0) is a list of FilterResult at about that many evenly
+    spaced samples, all with the final noise level, for convergence plots.
+    """
+    srif, st = Srif(), StreamState(kind, noise)
+    if checkpoints <= 0:
+        fold(srif, st, tau, z, period_s)
+        return result(srif, st, period_s), []
+    edges = np.unique(np.linspace(0, len(tau), checkpoints + 1).astype(int))
+    partial = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        fold(srif, st, tau[lo:hi], z[lo:hi], period_s)
+        partial.append((srif.r.copy(), srif.rows, StreamState(**vars(st))))
+    final = result(srif, st, period_s)
+    history = []
+    for r, rows, snap in partial:
+        s = Srif()
+        s.r, s.rows = r, rows
+        history.append(result(s, snap, period_s, noise_override=final.noise))
+    return final, history
