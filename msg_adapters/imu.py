@@ -28,7 +28,11 @@ def fill_imu(msg: Any, t: float, gyro, accel, frame_id: str = 'imu_link') -> Any
     msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = map(float, gyro)
     a = msg.linear_acceleration
     a.x, a.y, a.z = map(float, accel)
-    cov = list(msg.orientation_covariance)
-    cov[0] = -1.0
-    msg.orientation_covariance = cov
+    cov = msg.orientation_covariance
+    try:
+        cov[0] = -1.0  # in place keeps the container type (rosbags serialises only ndarrays)
+    except TypeError:  # an immutable sequence: replace it
+        cov = list(cov)
+        cov[0] = -1.0
+        msg.orientation_covariance = cov
     return msg
