@@ -11,8 +11,9 @@ import pytest
 
 
 def _stand(**kw):
-    base = dict(amplitude=0.3, period_s=4.0, phase=0.2, offset=1e-3, drift_rate=2e-5,
-                drift_accel=1e-7, amplitude_noise=0.0, drift_rate_noise=0.0)
+    base = {'amplitude': 0.3, 'period_s': 4.0, 'phase': 0.2, 'offset': 1e-3,
+            'drift_rate': 2e-5, 'drift_accel': 1e-7, 'amplitude_noise': 0.0,
+            'drift_rate_noise': 0.0}
     base.update(kw)
     return StandConfig(**base)
 
