@@ -188,3 +188,28 @@ def alpha_from_model(tau: np.ndarray, coeffs: dict, kind_alpha: Optional[dict] =
     parts = np.stack([term_avar(t, tau, coeffs.get(t, 0.0)) for t in TERMS], axis=-1)
     dominant = np.argmax(parts, axis=-1)
     return np.array([alpha_map[TERMS[i]] for i in dominant], dtype=np.int64)
+
+
+def alpha_from_slope(tau: np.ndarray, avar: np.ndarray) -> np.ndarray:
+    """
+    Return alpha per (K, C) from the local log-log slope mu of sigma^2(tau).
+
+    sigma^2 ~ tau^mu with mu = -alpha - 1 for alpha in {0, -1, -2}; mu near -2 is white or
+    flicker phase noise, reported as alpha = 2 (quantization, the IEEE model's term). The
+    slope is taken over +-1 octave to damp the scatter; used where the samples are no longer
+    available (streaming) or as a cross-check of the ACF.
+    """
+    tau = np.asarray(tau, dtype=np.float64)
+    avar = np.asarray(avar, dtype=np.float64)
+    avar2 = avar[:, None] if avar.ndim == 1 else avar
+    lt = np.log(tau)
+    la = np.log(np.maximum(avar2, np.finfo(float).tiny))
+    out = np.zeros(avar2.shape, dtype=np.int64)
+    for k in range(tau.size):
+        sel = np.abs(lt - lt[k]) <= np.log(2.0) + 1e-12
+        if np.count_nonzero(sel) < 2:
+            sel = np.argsort(np.abs(lt - lt[k]))[:2]
+        x = lt[sel] - lt[sel].mean()
+        mu = (x @ (la[sel] - la[sel].mean(axis=0))) / max(x @ x, 1e-300)
+        out[k] = np.where(mu < -1.5, 2, np.clip(-np.round(mu) - 1, -2, 0))
+    return out if avar.ndim > 1 else out[:, 0]
