@@ -46,6 +46,8 @@ def sample_times(n: int, dt: float, jitter_s: float, rng: np.random.Generator,
     if jitter_s > 0:
         lim = JITTER_CLIP * dt
         t += np.clip(jitter_s * rng.standard_normal(n), -lim, lim)
+        # Never before the start: stamps of a run stay >= start (ROS times are unsigned).
+        t[0] = max(t[0], start)
     return t
 
 
