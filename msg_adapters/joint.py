@@ -1,7 +1,7 @@
 """Encoder angle from sensor_msgs/JointState or a stamped scalar."""
 from typing import Any, Optional, Tuple, Union
 
-from msg_adapters.imu import stamp_seconds
+from msg_adapters.imu import stamp_seconds, to_stamp
 
 
 def joint_angle(msg: Any, joint: Union[str, int] = 0) -> Optional[Tuple[float, float]]:
@@ -27,3 +27,12 @@ def joint_angle(msg: Any, joint: Union[str, int] = 0) -> Optional[Tuple[float, f
 def vector3_x(msg: Any) -> Tuple[float, float]:
     """geometry_msgs/Vector3Stamped -> (stamp s, x), for users logging the angle that way."""
     return stamp_seconds(msg.header.stamp), float(msg.vector.x)
+
+
+def fill_joint_state(msg: Any, t: float, positions, names, frame_id: str = '') -> Any:
+    """Fill a JointState in place: stamp ``t`` (s), ``names`` and ``positions`` (rad)."""
+    to_stamp(msg.header.stamp, t)
+    msg.header.frame_id = frame_id
+    msg.name = list(names)
+    msg.position = [float(p) for p in positions]
+    return msg
