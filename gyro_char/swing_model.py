@@ -108,6 +108,8 @@ class FilterResult:
     samples: int
     noise: float          # the noise level used (rad for the encoder, rad/sqrt(s) for the gyro)
     noise_estimated: bool
+    # The deterministic model's parameters X(t_ref) (without the gyro's random walk), for plots.
+    theta: Optional[np.ndarray] = None
 
     def amplitude(self) -> Estimate:
         a = float(np.hypot(self.x[0], self.x[1]))
