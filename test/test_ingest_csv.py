@@ -43,8 +43,8 @@ def test_partial_channels_and_encoder(tmp_path):
     np.testing.assert_allclose(enc.channels['encoder'], math.pi / 2)
 
 
-def test_real_adis_record():
-    rec = read_imu('/work/shared/data/adis16405/adis16405_static_1.csv.gz')
+def test_real_adis_record(adis_records):
+    rec = read_imu(str(adis_records[0]))
     assert len(rec) == 1_000_000 and abs(rec.dt - 0.01) < 1e-9
     assert sorted(rec.channels) == sorted(['gyro_x', 'gyro_y', 'gyro_z', 'accel_x', 'accel_y',
                                            'accel_z'])

@@ -1,0 +1,115 @@
+"""Bag reading: every format, fast path equal to rosbags bit for bit, topic choice, encoders."""
+from pathlib import Path
+import shutil
+
+from bag_factory import (imu_msg, imu_recording, joint_msg, STORE2, vector3_msg, write_ros1,
+                         write_ros2)
+from gyro_char.ingest.bag_read import read_imu_bag
+from gyro_char.recordings import IMU_CHANNELS, InputError, read_encoder, read_imu, write_bag
+import numpy as np
+import pytest
+
+IMU = 'sensor_msgs/msg/Imu'
+
+
+def _same(a, b):
+    assert np.array_equal(a.t, b.t)
+    assert sorted(a.channels) == sorted(b.channels)
+    for k in a.channels:
+        assert np.array_equal(a.channels[k], b.channels[k]), k
+
+
+def _expected_t(rec):
+    ns = np.round(rec.t * 1e9).astype(np.int64)
+    return (ns // 10**9) + (ns % 10**9) * 1e-9
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_own_writer_round_trip(tmp_path, storage):
+    rec = imu_recording(3000)
+    write_bag(str(tmp_path / 'b'), rec, storage=storage)
+    got = read_imu(str(tmp_path / 'b'), quiet=True)
+    assert got.notes == []
+    assert np.array_equal(got.t, _expected_t(rec))
+    for k in IMU_CHANNELS:
+        assert np.array_equal(got.channels[k], rec.channels[k])
+    _same(read_imu_bag(tmp_path / 'b'), read_imu_bag(tmp_path / 'b', fast=False))
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_fast_path_general_layouts_bit_for_bit(tmp_path, storage):
+    """Mixed endianness and frame_id lengths, interleaved with another topic (non-uniform)."""
+    rec = imu_recording(600, seed=3)
+    rng = np.random.default_rng(3)
+    msgs = []
+    for i, t in enumerate(rec.t):
+        six = [float(rec.channels[k][i]) for k in IMU_CHANNELS]
+        frame = 'f' * int(rng.integers(0, 12))
+        msgs.append((t, imu_msg(STORE2, t, six, frame_id=frame), bool(rng.integers(0, 2))))
+    joints = [(t, joint_msg(t, ['a', 'stand_joint'], [0.0, np.sin(t)]), True) for t in rec.t[::3]]
+    path = write_ros2(tmp_path / 'mixed', {'/imu/data_raw': (IMU, msgs),
+                                           '/stand/joint_states': ('sensor_msgs/msg/JointState',
+                                                                   joints)}, storage)
+    fast = read_imu_bag(Path(path))
+    _same(fast, read_imu_bag(Path(path), fast=False))
+    assert np.array_equal(fast.channels['gyro_y'], rec.channels['gyro_y'])
+    enc = read_encoder(path, joint='stand_joint', quiet=True)
+    assert np.array_equal(enc.channels['encoder'], np.sin(rec.t[::3]))
+    enc1 = read_encoder(path, joint=1, quiet=True)
+    assert np.array_equal(enc1.channels['encoder'], enc.channels['encoder'])
+    with pytest.raises(InputError, match="joint 'nope' is in none"):
+        read_encoder(path, joint='nope')
+
+
+def test_bare_mcap_and_ros1_bag(tmp_path):
+    rec = imu_recording(800, seed=5)
+    write_bag(str(tmp_path / 'b'), rec)
+    bare = tmp_path / 'copy.mcap'
+    shutil.copy(tmp_path / 'b' / 'b.mcap', bare)
+    _same(read_imu(str(bare)), read_imu(str(tmp_path / 'b')))
+    ros1 = write_ros1(tmp_path / 'r.bag', rec)
+    got = read_imu(ros1, quiet=True)
+    assert np.array_equal(got.t, _expected_t(rec))
+    assert np.array_equal(got.channels['accel_z'], rec.channels['accel_z'])
+
+
+def test_vector3_stamped_encoder(tmp_path):
+    t = 1.7e9 + np.arange(100) * 0.01
+    msgs = [(x, vector3_msg(x, 0.5 * k), True) for k, x in enumerate(t)]
+    path = write_ros2(tmp_path / 'v', {'/angle': ('geometry_msgs/msg/Vector3Stamped', msgs)})
+    enc = read_encoder(path)
+    assert np.array_equal(enc.channels['encoder'], 0.5 * np.arange(100))
+
+
+def _two_imu_topics(tmp_path):
+    rec = imu_recording(50)
+    msgs = [(t, imu_msg(STORE2, t, [0.1] * 6), True) for t in rec.t]
+    return write_ros2(tmp_path / 'two', {'/imu_a': (IMU, msgs), '/imu_b': (IMU, msgs),
+                                         '/empty': (IMU, []),
+                                         '/js': ('sensor_msgs/msg/JointState', [])})
+
+
+def test_topic_choice_errors(tmp_path):
+    path = _two_imu_topics(tmp_path)
+    with pytest.raises(InputError, match=r'several sensor_msgs/Imu topics.*/imu_a \['):
+        read_imu(path)
+    assert len(read_imu(path, topic='imu_b')) == 50  # leading slash optional
+    with pytest.raises(InputError, match=r"no topic '/imu_c' \(topics: /empty"):
+        read_imu(path, topic='/imu_c')
+    with pytest.raises(InputError, match='carries sensor_msgs/msg/JointState, not'):
+        read_imu(path, topic='/js')
+    with pytest.raises(InputError, match='has no messages'):
+        read_imu(path, topic='/empty')
+    with pytest.raises(InputError, match='topic /js has no messages'):
+        read_encoder(path)  # the only encoder-type topic is empty
+    with pytest.raises(InputError, match='carries sensor_msgs/msg/Imu'):
+        read_encoder(path, topic='/imu_a')
+
+
+def test_not_a_bag(tmp_path):
+    (tmp_path / 'd').mkdir()
+    with pytest.raises(InputError, match='without metadata.yaml'):
+        read_imu(str(tmp_path / 'd'))
+    (tmp_path / 'x.txt').write_text('hello')
+    with pytest.raises(InputError, match='unknown input type'):
+        read_imu(str(tmp_path / 'x.txt'))
