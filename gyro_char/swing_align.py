@@ -18,7 +18,7 @@ GYRO_GAP_FACTOR = 10.0      # a gyro gap longer than this many median intervals 
 ENCODER_GAP_PERIODS = 0.25  # an encoder gap longer than this fraction of T leaves the swing unseen
 PERIOD_TOLERANCE = 0.02     # warn when the dominant period differs from T by more than this
 MIN_AXIS_RATIO = 0.5        # gyro swing amplitude / encoder's below this: wrong axis
-FFT_MAX_POINTS = 1 << 20
+FFT_MAX_POINTS = 1 << 16  # plenty for swing periods >= 0.01 s over 15 min
 
 
 @dataclass
@@ -71,7 +71,7 @@ def _check_gaps(tau: np.ndarray, limit: float, what: str, why: str) -> None:
 
 def _fit_amplitude(tau: np.ndarray, y: np.ndarray, period_s: float, poly: int) -> float:
     """Amplitude at the swing period of y by least squares with a polynomial trend."""
-    step = max(1, tau.size // 200_000)
+    step = max(1, tau.size // 50_000)
     tt, yy = tau[::step], y[::step]
     a = 2 * np.pi * tt / period_s
     s = tt / max(tt[-1], 1e-9)

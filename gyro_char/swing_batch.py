@@ -26,11 +26,13 @@ from gyro_char.swing_model import (
     E3, FilterResult, GYRO_ANCHOR_S, prior_information_sqrt, regressor, scaling, TIME_SCALE_S,
     transition)
 import numpy as np
+from scipy.linalg.lapack import dgeqrf
 
 ENCODER = 'encoder'
 GYRO = 'gyro'
 NOISE_BLOCK = 64  # gyro samples per increment when estimating N from the residuals
 MIN_BLOCKS = 20
+QR_ROWS = 1024
 
 
 def encoder_rows(tau: np.ndarray, z: np.ndarray, period_s: float):
@@ -88,10 +90,21 @@ class Srif:
     def add(self, u: np.ndarray, y: np.ndarray, sw: np.ndarray) -> None:
         if len(y) == 0:
             return
-        a = np.empty((len(y), 6))
-        a[:, :5] = u * sw[:, None]
-        a[:, 5] = y * sw
-        self.r = np.linalg.qr(np.vstack([self.r, a]), mode='r')
+        rows = np.empty((len(y), 6))
+        rows[:, :5] = u * sw[:, None]
+        rows[:, 5] = y * sw
+        # Blocks of QR_ROWS rows, each stacked under the current factor: cache-sized LAPACK
+        # calls that stay single-threaded (multi-threaded BLAS on a loaded box is far slower).
+        for lo in range(0, len(y), QR_ROWS):
+            blk = rows[lo:lo + QR_ROWS]
+            k = self.r.shape[0]
+            a = np.empty((k + len(blk), 6), order='F')
+            a[:k] = self.r
+            a[k:] = blk
+            qr, _, _, info = dgeqrf(a, overwrite_a=1)
+            if info != 0:
+                raise ArithmeticError(f'QR failed (LAPACK info {info})')
+            self.r = np.triu(qr[:6])
         self.rows += len(y)
 
     @property
