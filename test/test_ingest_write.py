@@ -43,8 +43,9 @@ def test_imu_encoding_bit_for_bit(frame_id):
         assert bytes(STORE.serialize_cdr(msg, 'sensor_msgs/msg/Imu')) == raw[i].tobytes()
     t, values, ok = decode_imu(raw.reshape(-1), np.arange(300) * raw.shape[1],
                                np.full(300, raw.shape[1]))
-    assert ok.all()
-    for i in range(0, 300, 7):
+    # a non-ASCII frame_id is left to rosbags' per-message path (it judges the UTF-8)
+    assert ok.all() if frame_id.isascii() else not ok.any()
+    for i in range(0, 300 if frame_id.isascii() else 0, 7):
         msg = STORE.deserialize_cdr(raw[i].tobytes(), 'sensor_msgs/msg/Imu')
         stamp, six = imu_sample(msg)
         assert t[i] == stamp

@@ -49,9 +49,11 @@ class Bag:
             self.reader = AnyReader([path], default_typestore=typestore())
             self.reader.open()
         except READ_ERRORS as exc:
-            raise InputError(f'{path}: cannot open bag: {_first_line(exc)}') from None
+            raise InputError(f'{path}: cannot open bag (truncated or corrupt?): '
+                             f'{_first_line(exc)}') from None
         except Exception as exc:  # noqa: B902 - rosbags' own error classes derive from Exception
-            raise InputError(f'{path}: cannot open bag: {_first_line(exc)}') from None
+            raise InputError(f'{path}: cannot open bag (truncated or corrupt?): '
+                             f'{_first_line(exc)}') from None
 
     def __enter__(self) -> 'Bag':
         return self
@@ -255,10 +257,10 @@ def read_imu_bag(path: Path, topic: Optional[str] = None, quiet: bool = False,
             if fast and bag.storage() in ('sqlite3', 'mcap'):
                 return _fast_imu(bag, name, quiet)
             return _slow_imu(bag, name, quiet)
-        except READ_ERRORS as exc:
-            raise InputError(f'{path}: cannot read {name}: {_first_line(exc)}') from None
         except InputError:
             raise
+        except READ_ERRORS as exc:
+            raise InputError(f'{path}: cannot read {name}: {_first_line(exc)}') from None
         except Exception as exc:  # noqa: B902 - rosbags' reader errors derive from Exception
             raise InputError(f'{path}: cannot read {name}: {_first_line(exc)}') from None
 

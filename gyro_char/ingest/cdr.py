@@ -85,6 +85,22 @@ def _gather(buf: np.ndarray, pos: np.ndarray, code: str, big: np.ndarray) -> np.
     return out
 
 
+def _ascii_frames(buf: np.ndarray, start: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """
+    Whether each frame_id (``length`` bytes at ``start``) is pure ASCII.
+
+    rosbags rejects frame_ids that are not UTF-8; ASCII always is, and anything else is left to
+    the per-message path so both paths accept exactly the same messages.
+    """
+    if start.size == 0:
+        return np.ones(0, dtype=bool)
+    lo, hi = int(start.min()), int((start + length).max())
+    high = np.flatnonzero(buf[lo:hi] >= 0x80) + lo  # only the span the messages cover
+    if high.size == 0:
+        return np.ones(start.size, dtype=bool)
+    return np.searchsorted(high, start) == np.searchsorted(high, start + length)
+
+
 def decode_imu(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray
                ) -> Tuple[np.ndarray, Dict[str, np.ndarray], np.ndarray]:
     """
@@ -111,6 +127,7 @@ def decode_imu(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray
     need = 4 + a + IMU_TAIL
     size = sizes[idx]
     good &= (strlen >= 1) & (size >= need) & (size <= need + MAX_TRAILING)
+    good &= _ascii_frames(buf, off + 16, np.where(good, strlen - 1, 0))
     idx, off, big, a = idx[good], off[good], big[good], a[good]
     ok[:] = False
     ok[idx] = True
@@ -158,6 +175,8 @@ def _decode_uniform(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray):
         return None
     if np.any(rows[:, 0:2] != rows[0, 0:2]) or np.any(rows[:, 12:16] != rows[0, 12:16]):
         return None
+    if strlen > 1 and np.any(rows[:, 16:15 + strlen] >= 0x80):
+        return None  # non-ASCII frame_id: let rosbags judge its UTF-8
     sec = np.ascontiguousarray(rows[:, 4:8]).view(order + 'i4')[:, 0].astype(np.float64)
     nsec = np.ascontiguousarray(rows[:, 8:12]).view(order + 'u4')[:, 0].astype(np.float64)
     t = sec + nsec * 1e-9
