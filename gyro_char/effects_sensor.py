@@ -212,8 +212,10 @@ class AngleQuantization(Effect):
     summary = 'angle (increment) quantization beyond dH: Allan slope -1, sigma^2 = 3 Q^2 / tau^2'
     physics = ('The sensor accumulates angle and outputs whole counts of step_rad per sample: '
                'rate_out = (C_k - C_(k-1)) step / dt with C_k = [theta_k / step]. The angle '
-               'error is uniform and white when the angle spreads over many steps, so the rate '
-               'gets the IEEE quantization term Q = step / sqrt(12).')
+               'error is uniform and white when the per-sample angle increments spread over at '
+               'least ~step/2 (rate noise N sqrt(dt) >= step / 2; otherwise it is correlated '
+               'and the -1 slope is not formed), so the rate gets the IEEE quantization term '
+               'Q = step / sqrt(12).')
     PARAMS = {'step_rad': (1.0e-5, 'rad', 'angle quantum'),
               'axis': (-1.0, '-', '-1: all gyro axes, 0/1/2: x/y/z')}
 

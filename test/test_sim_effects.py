@@ -1,0 +1,280 @@
+"""Each catalogue effect's signature against theory (Allan, spectrum or swing residual)."""
+import math
+
+from gyro_char.bench_sim import simulate_static, simulate_swing
+from gyro_char.effects import build_effects, EFFECTS, parse_effect
+from gyro_char.effects_sensor import bartlett_kernel, InternalLowpass
+from gyro_char.recordings import InputError
+from gyro_char.sim_chain import G0, stand_angle_clean, stand_motion
+from gyro_char.sim_config import BenchConfig, noiseless
+import numpy as np
+import pytest
+
+CATALOGUE = {
+    'internal_lowpass', 'time_delay', 'timestamp_jitter', 'bias_instability',
+    'rate_random_walk', 'gauss_markov', 'quantization', 'temperature_drift',
+    'scale_factor_nonlinearity', 'scale_factor_asymmetry', 'cross_axis', 'g_sensitivity',
+    'vibration', 'encoder_cyclic_error'}
+
+
+def _quiet(rate=100.0, white=0.0):
+    cfg = noiseless(BenchConfig.from_preset('adis16405'), keep_errors=False)
+    cfg.gyro.static_rate_hz = rate
+    cfg.noise['gyro_x']['N'] = white
+    return cfg
+
+
+def _oadev(x, rate, taus):
+    allantools = pytest.importorskip('allantools')
+    return allantools.oadev(x, rate=rate, data_type='freq', taus=np.asarray(taus))[1]
+
+
+def test_catalogue_names_are_the_design_contract():
+    assert set(EFFECTS) == CATALOGUE
+    for cls in EFFECTS.values():
+        assert cls.summary and cls.physics and cls.name in CATALOGUE
+
+
+def test_parse_effect_syntax_and_errors():
+    e = parse_effect('time_delay:delay_s=0.0025')
+    assert e.delay_s == 0.0025 and e.describe() == {'name': 'time_delay',
+                                                     'params': {'delay_s': 0.0025}}
+    assert parse_effect('vibration').params['freq_hz'] == 19.0
+    for bad in ('nope', 'time_delay:delay_s', 'time_delay:x=1', 'gauss_markov:tau_s=0',
+                'internal_lowpass:taps=2.5', 'vibration:amplitude=nan'):
+        with pytest.raises(InputError):
+            parse_effect(bad)
+    assert [e.name for e in build_effects([{'name': 'quantization', 'params': {}},
+                                           'time_delay'])] == ['quantization', 'time_delay']
+
+
+def test_effect_leaves_the_baseline_noise_of_the_seed_unchanged():
+    cfg = BenchConfig.from_preset('adis16405')
+    cfg.gyro.output_step = 0.0
+    base = simulate_static(cfg, duration=20.0, seed=4)
+    tone = simulate_static(cfg, duration=20.0, seed=4,
+                           effects=['vibration:freq_hz=7,amplitude=0.01,axis=1'])
+    diff = tone.imu.channels['gyro_y'] - base.imu.channels['gyro_y']
+    assert np.allclose(np.abs(diff).max(), 0.01, rtol=1e-3)
+    assert np.array_equal(tone.imu.channels['gyro_x'], base.imu.channels['gyro_x'])
+
+
+@pytest.mark.parametrize('taps,stages,dec', [(4, 2, 2), (16, 2, 8), (8, 1, 8), (3, 1, 1)])
+def test_internal_lowpass_autocorrelation_and_long_tau_arw(taps, stages, dec):
+    rate, white = 100.0, 1e-3
+    cfg = _quiet(rate, white)
+    fx = f'internal_lowpass:taps={taps},stages={stages},decimation={dec}'
+    run = simulate_static(cfg, duration=2000.0, seed=5, effects=[fx], channels=['gyro_x'])
+    x = run.imu.channels['gyro_x']
+    h = bartlett_kernel(taps, stages)
+    for lag in (1, 2):
+        want = np.dot(h[:h.size - lag * dec], h[lag * dec:]) / np.dot(h, h) \
+            if lag * dec < h.size else 0.0
+        got = np.corrcoef(x[:-lag], x[lag:])[0, 1]
+        assert got == pytest.approx(want, abs=0.01), (lag, got, want)
+    # Per-sample variance: white of density N at the internal rate through h.
+    assert x.var() == pytest.approx(white ** 2 * rate * dec * np.dot(h, h), rel=0.02)
+    gain = InternalLowpass(taps=taps, stages=stages, decimation=dec).noise_gain(dec)
+    assert run.truth['channels']['gyro_x']['N'] == pytest.approx(white * gain)
+    taus = np.array([2.0, 10.0])
+    got = _oadev(x, rate, taus)
+    assert np.allclose(got, white * gain / np.sqrt(taus), rtol=0.06)
+
+
+def test_internal_lowpass_boxcar_over_the_decimation_keeps_arw():
+    assert InternalLowpass(taps=8, stages=1, decimation=8).noise_gain(8) == pytest.approx(1.0)
+    assert InternalLowpass(taps=1, stages=1, decimation=4).noise_gain(4) == pytest.approx(2.0)
+
+
+def _fourier(t, y, w, harmonics=3):
+    cols = [np.ones_like(t)]
+    for k in range(1, harmonics + 1):
+        cols += [np.cos(k * w * t), np.sin(k * w * t)]
+    coef, *_ = np.linalg.lstsq(np.column_stack(cols), y, rcond=None)
+    return coef
+
+
+def _swing_cfg():
+    return noiseless(BenchConfig.from_preset('adis16405'), keep_errors=False)
+
+
+def test_time_delay_fractional_gives_quadrature_residual():
+    cfg = _swing_cfg()
+    delay = 3.7e-4       # 0.37 of a 1 kHz sample
+    run = simulate_swing(cfg, duration=20.0, seed=1, effects=[f'time_delay:delay_s={delay}'],
+                         channels=['gyro_x'])
+    t, g = run.imu.t, run.imu.channels['gyro_x']
+    angle = np.concatenate([[0.0], np.cumsum(0.5 * (g[1:] + g[:-1]) * np.diff(t))])
+    te, enc = run.encoder.t, run.encoder.channels['encoder']
+    inside = (te > t[0] + 0.01) & (te < t[-1] - 0.01)
+    resid = np.interp(te[inside], t, angle) - enc[inside]
+    w = 2 * np.pi / cfg.stand.period_s
+    coef = _fourier(te[inside], resid, w, 1)
+    w_amp = cfg.stand.amplitude * w
+    # phi(t - d) - phi(t) = -d phi_dot(t) = -d A w cos(w t): in quadrature with the angle.
+    assert coef[1] == pytest.approx(-w_amp * delay, rel=0.01)
+    assert abs(coef[2]) < 0.01 * w_amp * delay
+
+
+def test_timestamp_jitter_on_encoder_adds_rate_times_sigma():
+    cfg = _swing_cfg()
+    sigma = 1e-4
+    run = simulate_swing(cfg, duration=200.0, seed=2, channels=['gyro_x'],
+                         effects=[f'timestamp_jitter:sigma_s={sigma},stream=1'])
+    te = run.encoder.t
+    resid = run.encoder.channels['encoder'] - stand_angle_clean(cfg.stand, te)
+    w_amp = cfg.stand.amplitude * 2 * np.pi / cfg.stand.period_s
+    assert resid.var() == pytest.approx(w_amp ** 2 / 2 * sigma ** 2, rel=0.03)
+    nominal = np.arange(len(run.imu)) / cfg.gyro.rate_hz
+    assert np.allclose(run.imu.t, nominal)     # IMU stamps untouched
+
+
+def test_temperature_drift_exponential_recovered():
+    from scipy.optimize import curve_fit
+    # Noise 5e-5 rad/sqrt(s): the fit's 1-sigma on tau is ~0.5 % (Fisher information).
+    cfg = _quiet(100.0, 5e-5)
+    run = simulate_static(cfg, duration=1500.0, seed=3, channels=['gyro_x'],
+                          effects=['temperature_drift:amplitude=0.002,tau_s=250'])
+    x = run.imu.channels['gyro_x'].reshape(-1, 100).mean(axis=1)
+    tm = run.imu.t.reshape(-1, 100).mean(axis=1)
+    (amp, tau, off), _ = curve_fit(lambda t, a, b, c: a * np.exp(-t / b) + c, tm, x,
+                                   p0=(0.001, 100.0, 0.0))
+    assert amp == pytest.approx(0.002, rel=0.02)
+    assert tau == pytest.approx(250.0, rel=0.02)
+    assert abs(off) < 2e-5
+
+
+def test_bias_instability_floor_and_truth():
+    b = 2e-4
+    cfg = _quiet(50.0, 1e-5)
+    run = simulate_static(cfg, duration=4 * 3600.0, seed=6, channels=['gyro_x'],
+                          effects=[f'bias_instability:B={b},axis=0'])
+    got = _oadev(run.imu.channels['gyro_x'], 50.0, [10.0, 100.0])
+    assert np.allclose(got, b * math.sqrt(2 * math.log(2) / math.pi), rtol=0.15)
+    assert run.truth['channels']['gyro_x']['B'] == pytest.approx(b)
+
+
+def test_rate_random_walk_slope_and_truth():
+    k = 1e-4
+    cfg = _quiet(50.0, 1e-5)
+    run = simulate_static(cfg, duration=3600.0, seed=7, channels=['gyro_x'],
+                          effects=[f'rate_random_walk:K={k},axis=0'])
+    taus = np.array([10.0, 60.0])
+    got = _oadev(run.imu.channels['gyro_x'], 50.0, taus)
+    assert np.allclose(got, k * np.sqrt(taus / 3.0), rtol=0.2)
+    assert run.truth['channels']['gyro_x']['K'] == pytest.approx(k)
+
+
+def test_gauss_markov_variance_correlation_and_allan():
+    sigma, tc, rate = 1e-3, 2.0, 50.0
+    cfg = _quiet(rate, 0.0)
+    run = simulate_static(cfg, duration=4000.0, seed=8, channels=['gyro_x'],
+                          effects=[f'gauss_markov:sigma={sigma},tau_s={tc},axis=0'])
+    x = run.imu.channels['gyro_x']
+    assert x.var() == pytest.approx(sigma ** 2, rel=0.1)
+    lag = 25     # 0.5 s
+    assert np.corrcoef(x[:-lag], x[lag:])[0, 1] == pytest.approx(math.exp(-0.5 / tc),
+                                                                 abs=0.03)
+    taus = np.array([0.5, 2.0, 10.0])
+    q = 2 * sigma ** 2 / tc
+    want = np.sqrt(q * tc ** 2 / taus * (1 - tc / (2 * taus) * (
+        3 - 4 * np.exp(-taus / tc) + np.exp(-2 * taus / tc))))
+    assert np.allclose(_oadev(x, rate, taus), want, rtol=0.1)
+
+
+def test_angle_quantization_gives_q_term():
+    # Per-sample angle increments of sigma N sqrt(dt) = step / 2: the quantization error of
+    # the angle is then uniform and white (its lag-1 correlation ~ exp(-2 pi^2 / 4) < 0.01),
+    # the condition of the IEEE Q term; 3 Q^2 / tau^2 = N^2 / tau at tau = dt.
+    step, white, rate = 2e-5, 1e-4, 100.0
+    cfg = _quiet(rate, white)
+    run = simulate_static(cfg, duration=1000.0, seed=9, channels=['gyro_x'],
+                          effects=[f'quantization:step_rad={step},axis=0'])
+    x = run.imu.channels['gyro_x']
+    q = step / math.sqrt(12.0)
+    taus = np.array([0.01, 0.03, 0.1])
+    want = np.sqrt(white ** 2 / taus + 3 * q ** 2 / taus ** 2)
+    assert np.allclose(_oadev(x, rate, taus), want, rtol=0.05)
+    assert run.truth['channels']['gyro_x']['Q'] == pytest.approx(q)
+    assert np.allclose(np.round(x * 0.01 / step), x * 0.01 / step)
+
+
+def test_vibration_line_amplitude_and_frequency():
+    rate, amp, f = 200.0, 0.01, 19.3
+    cfg = _quiet(rate, 1e-4)
+    run = simulate_static(cfg, duration=100.0, seed=10, channels=['gyro_x'],
+                          effects=[f'vibration:freq_hz={f},amplitude={amp},axis=0'])
+    x = run.imu.channels['gyro_x']
+    from scipy.signal import periodogram
+    freqs, psd = periodogram(x, fs=rate, window='hann', scaling='spectrum')
+    peak = np.argmax(psd)
+    assert freqs[peak] == pytest.approx(f, abs=0.02)
+    coef = _fourier(run.imu.t, x, 2 * np.pi * f, 1)
+    assert math.hypot(coef[1], coef[2]) == pytest.approx(amp, rel=0.01)
+
+
+def test_scale_factor_nonlinearity_harmonics():
+    cfg = _swing_cfg()
+    k2, k3 = 0.02, 0.05
+    run = simulate_swing(cfg, duration=20.0, seed=11, channels=['gyro_x'],
+                         effects=[f'scale_factor_nonlinearity:k2={k2},k3={k3}'])
+    w = 2 * np.pi / cfg.stand.period_s
+    big_w = cfg.stand.amplitude * w
+    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
+    assert c[0] == pytest.approx(k2 * big_w ** 2 / 2, rel=1e-3)
+    assert c[1] == pytest.approx(big_w + 3 * k3 * big_w ** 3 / 4, rel=1e-4)
+    assert c[3] == pytest.approx(k2 * big_w ** 2 / 2, rel=1e-3)
+    assert c[5] == pytest.approx(k3 * big_w ** 3 / 4, rel=1e-3)
+
+
+def test_scale_factor_asymmetry_dc_and_second_harmonic():
+    cfg = _swing_cfg()
+    a = 0.01
+    run = simulate_swing(cfg, duration=20.0, seed=12, channels=['gyro_x'],
+                         effects=[f'scale_factor_asymmetry:a={a}'])
+    w = 2 * np.pi / cfg.stand.period_s
+    big_w = cfg.stand.amplitude * w
+    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
+    assert c[0] == pytest.approx(2 * a * big_w / np.pi, rel=1e-3)
+    assert c[1] == pytest.approx(big_w, rel=1e-5)
+    assert c[3] == pytest.approx(4 * a * big_w / (3 * np.pi), rel=1e-2)
+
+
+def test_cross_axis_coupling_slope():
+    cfg = _swing_cfg()
+    run = simulate_swing(cfg, duration=10.0, seed=13, channels=['gyro_x', 'gyro_y', 'gyro_z'],
+                         effects=['cross_axis:yx=0.003,zx=-0.001'])
+    _, rate, _ = stand_motion(cfg.stand, run.imu.t, np.random.default_rng(0))
+    for name, m in (('gyro_y', 0.003), ('gyro_z', -0.001)):
+        slope = np.dot(run.imu.channels[name], rate) / np.dot(rate, rate)
+        assert slope == pytest.approx(m, rel=1e-9)
+
+
+def test_g_sensitivity_in_phase_with_angle():
+    cfg = _swing_cfg()
+    gy, gz = 1e-4, 5e-5
+    run = simulate_swing(cfg, duration=10.0, seed=14, channels=['gyro_x'],
+                         effects=[f'g_sensitivity:gy={gy},gz={gz}'])
+    t = run.imu.t
+    _, rate, _ = stand_motion(cfg.stand, t, np.random.default_rng(0))
+    phi = stand_angle_clean(cfg.stand, t)
+    extra = run.imu.channels['gyro_x'] - rate
+    design = np.column_stack([G0 * np.sin(phi), G0 * np.cos(phi)])
+    coef, *_ = np.linalg.lstsq(design, extra, rcond=None)
+    assert np.allclose(coef, [gy, gz], rtol=1e-9)
+
+
+def test_encoder_cyclic_error_locked_to_angle():
+    cfg = _swing_cfg()
+    lines, a1, a2 = 1024.0, 4e-6, 1.5e-6
+    run = simulate_swing(cfg, duration=10.0, seed=15, channels=['gyro_x'],
+                         effects=[f'encoder_cyclic_error:lines={lines},a1={a1},a2={a2},'
+                                  f'p1=0.3,p2=-1.0'])
+    phi = stand_angle_clean(cfg.stand, run.encoder.t)
+    err = run.encoder.channels['encoder'] - phi
+    x = lines * phi
+    design = np.column_stack([np.sin(x), np.cos(x), np.sin(2 * x), np.cos(2 * x)])
+    c, *_ = np.linalg.lstsq(design, err, rcond=None)
+    assert math.hypot(c[0], c[1]) == pytest.approx(a1, rel=1e-6)
+    assert math.atan2(c[1], c[0]) == pytest.approx(0.3, abs=1e-6)
+    assert math.hypot(c[2], c[3]) == pytest.approx(a2, rel=1e-6)
