@@ -37,8 +37,8 @@ def test_catalogue_names_are_the_design_contract():
 
 def test_parse_effect_syntax_and_errors():
     e = parse_effect('time_delay:delay_s=0.0025')
-    assert e.delay_s == 0.0025 and e.describe() == {'name': 'time_delay',
-                                                     'params': {'delay_s': 0.0025}}
+    assert e.delay_s == 0.0025
+    assert e.describe() == {'name': 'time_delay', 'params': {'delay_s': 0.0025}}
     assert parse_effect('vibration').params['freq_hz'] == 19.0
     for bad in ('nope', 'time_delay:delay_s', 'time_delay:x=1', 'gauss_markov:tau_s=0',
                 'internal_lowpass:taps=2.5', 'vibration:amplitude=nan'):
