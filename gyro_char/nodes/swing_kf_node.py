@@ -1,0 +1,304 @@
+"""
+swing_kf_node: live swing-stand calibration of one gyro axis against the stand encoder.
+
+Per message the callbacks only check the stamp (``StreamHealth.admit``) and append
+``(stamp, receive time, value)`` to a deque; a timer drains the deques every
+``processing_period_s`` and feeds the chunks to ``SwingOnline`` (the core aligns the streams by
+their header stamps). Estimates go out on ``~/estimates`` at ``publish_rate_hz``; input health
+and convergence on ``/diagnostics`` at 1 Hz.
+"""
+from collections import deque
+import time
+from typing import Any, Dict, List
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from gyro_char.nodes.node_common import (
+    declare, InvalidParameter, Param, RELIABLE_10, sensor_qos, spin, split_at_markers, validate)
+from gyro_char.stream_health import DROP, RESTART, stream_skew_s, StreamHealth
+from gyro_char.swing_model import SwingNoise
+from gyro_char.swing_online import SwingOnline
+from msg_adapters.diagnostics import diagnostic_array, diagnostic_status, ERROR, OK, WARN
+import numpy as np
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from sensor_msgs.msg import Imu, JointState
+from std_srvs.srv import Trigger
+
+NAME = 'swing_kf_node'
+
+PARAMS = [
+    Param('imu_topic', 'imu/data_raw', 'sensor_msgs/Imu input topic', read_only=True),
+    Param('encoder_topic', 'stand/joint_states',
+          'sensor_msgs/JointState with the stand angle (rad)', read_only=True),
+    Param('input_queue_depth', 2000,
+          'subscription history depth (best effort); must cover the longest pause between '
+          'chunk timer runs at the input rate', read_only=True, low=10, high=100000),
+    Param('axis', 'x', 'gyro axis along the swing axis', choices=('x', 'y', 'z')),
+    Param('joint_name', '', 'encoder joint name in JointState.name ("" = use joint_index)'),
+    Param('joint_index', 0, 'encoder joint index in JointState.position when joint_name is ""',
+          low=0, high=1000),
+    Param('period_s', 5.0, 'stand swing period (s)', low=0.01, high=3600.0),
+    Param('publish_rate_hz', 2.0, 'rate of ~/estimates (Hz)', low=0.01, high=50.0),
+    Param('processing_period_s', 0.05, 'chunk timer period (s): buffered samples are fed to '
+          'the filter this often', read_only=True, low=0.001, high=1.0),
+    Param('encoder_noise_rad', 0.0,
+          'encoder white angle noise 1-sigma (rad); 0 = estimate from the data', low=0.0,
+          high=1.0),
+    Param('gyro_noise_density_rad_sqrt_s', 0.0,
+          'gyro white rate noise density (rad/sqrt(s)); 0 = estimate from the data', low=0.0,
+          high=1.0),
+    Param('frame_id', '', 'expected Imu header.frame_id ("" = accept any)'),
+    Param('hardware_id', 'gyro', 'hardware_id reported in /diagnostics'),
+    Param('stall_timeout_s', 1.0, 'a stream silent this long is reported stalled (s)',
+          low=0.01, high=3600.0),
+    Param('max_skew_s', 0.05, 'largest tolerated difference between the stamp-to-arrival '
+          'offsets of the two streams (s)', low=1e-4, high=3600.0),
+    Param('max_rate_hz', 20000.0, 'messages per second per stream above which the excess is '
+          'dropped as a flood (0 = no limit)', low=0.0, high=1e6),
+]
+SPECS = {p.name: p for p in PARAMS}
+# Changing these restarts the filter (the accumulated information refers to the old setting).
+RESTARTING = {'axis', 'joint_name', 'joint_index', 'period_s', 'encoder_noise_rad',
+              'gyro_noise_density_rad_sqrt_s'}
+
+
+class SwingKfNode(Node):
+    """Thin rclpy front door to ``SwingOnline``."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(NAME, **kwargs)
+        self.p = declare(self, PARAMS)
+        self._imu_q: deque = deque()
+        self._enc_q: deque = deque()
+        self.imu_health = StreamHealth('imu')
+        self.enc_health = StreamHealth('encoder')
+        self.missing_joint = 0
+        self.core_restarts = 0
+        self.processing_errors = 0
+        self._converged = False
+        self._fed_last: Dict[str, float] = {}
+        self._last_diag: Dict[str, Dict] = {}
+        self._configure()
+        depth = self.p['input_queue_depth']
+        self.create_subscription(Imu, self.p['imu_topic'], self._on_imu, sensor_qos(depth))
+        self.create_subscription(JointState, self.p['encoder_topic'], self._on_encoder,
+                                 sensor_qos(depth))
+        self.estimates_pub = self.create_publisher(DiagnosticArray, '~/estimates', RELIABLE_10)
+        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', RELIABLE_10)
+        self.create_service(Trigger, '~/reset', self._on_reset)
+        self.create_timer(self.p['processing_period_s'], self.process)
+        self._publish_timer = self.create_timer(1.0 / self.p['publish_rate_hz'],
+                                                self.publish_estimates)
+        self.create_timer(1.0, self.publish_diagnostics)
+        self.add_on_set_parameters_callback(self._validate)
+        self.add_post_set_parameters_callback(self._apply)
+
+    # -- configuration -----------------------------------------------------------------------
+
+    def _configure(self) -> None:
+        p = self.p
+        self._axis = p['axis']
+        self._joint = p['joint_name'] or p['joint_index']
+        noise = SwingNoise(p['encoder_noise_rad'] or None,
+                           p['gyro_noise_density_rad_sqrt_s'] or None)
+        self.core = SwingOnline(p['period_s'], noise)
+        for h in (self.imu_health, self.enc_health):
+            h.max_rate_hz = p['max_rate_hz']
+        self.imu_health.frame_id = p['frame_id']
+
+    def _validate(self, params: List[Any]):
+        return validate(SPECS, params, current=self.p)
+
+    def _apply(self, params: List[Any]) -> None:
+        names = {q.name for q in params}
+        self.p.update({q.name: q.value for q in params if q.name in SPECS})
+        if names & RESTARTING:
+            self._restart_core('parameters changed: ' + ', '.join(sorted(names & RESTARTING)))
+        else:
+            for h in (self.imu_health, self.enc_health):
+                h.max_rate_hz = self.p['max_rate_hz']
+            self.imu_health.frame_id = self.p['frame_id']
+        if 'publish_rate_hz' in names:
+            self.destroy_timer(self._publish_timer)
+            self._publish_timer = self.create_timer(1.0 / self.p['publish_rate_hz'],
+                                                    self.publish_estimates)
+
+    def _restart_core(self, why: str) -> None:
+        self.process()
+        self._configure()
+        self.core_restarts += 1
+        self.get_logger().info(f'filter restarted ({why})')
+
+    # -- per message: O(1) ---------------------------------------------------------------------
+
+    def _on_imu(self, msg: Imu) -> None:
+        st = msg.header.stamp
+        t = st.sec + st.nanosec * 1e-9
+        now = time.time()
+        code = self.imu_health.admit(t, now, msg.header.frame_id)
+        if code == DROP:
+            return
+        if code == RESTART:
+            self._imu_q.append(None)
+        self._imu_q.append((t, now, getattr(msg.angular_velocity, self._axis)))
+
+    def _on_encoder(self, msg: JointState) -> None:
+        st = msg.header.stamp
+        t = st.sec + st.nanosec * 1e-9
+        joint = self._joint
+        try:
+            index = msg.name.index(joint) if isinstance(joint, str) else joint
+            angle = msg.position[index]
+        except (ValueError, IndexError):
+            self.missing_joint += 1
+            return
+        now = time.time()
+        code = self.enc_health.admit(t, now)
+        if code == DROP:
+            return
+        if code == RESTART:
+            self._enc_q.append(None)
+        self._enc_q.append((t, now, angle))
+
+    # -- per chunk -----------------------------------------------------------------------------
+
+    def process(self) -> None:
+        """Drain both queues into the filter; a failing chunk is counted, never fatal."""
+        try:
+            self._process()
+        except (ValueError, ArithmeticError, IndexError) as exc:
+            self.processing_errors += 1
+            self.get_logger().error(f'chunk dropped: {exc!r}', throttle_duration_sec=10.0)
+
+    def _process(self) -> None:
+        for q, health, feed in ((self._imu_q, self.imu_health, 'add_imu'),
+                                (self._enc_q, self.enc_health, 'add_encoder')):
+            n = len(q)
+            if not n:
+                continue
+            items = [q.popleft() for _ in range(n)]
+            runs = split_at_markers(items)
+            for i, run in enumerate(runs):
+                if i > 0:
+                    self._restart_core(f'{health.name} stamps restarted')
+                if not run:
+                    continue
+                arr = np.array(run, dtype=np.float64)
+                finite = np.isfinite(arr[:, 2])
+                health.count_non_finite(arr.shape[0] - int(finite.sum()))
+                arr = arr[finite]
+                health.observe_chunk(arr[:, 0], arr[:, 1], self._fed_last.get(health.name))
+                if arr.shape[0]:
+                    self._fed_last[health.name] = float(arr[-1, 0])
+                    getattr(self.core, feed)(arr[:, 0], arr[:, 2])
+
+    # -- outputs -------------------------------------------------------------------------------
+
+    def estimate_values(self) -> Dict[str, Any]:
+        """Return the current estimates as diagnostics key/values (SI units in the keys)."""
+        e = self.core.estimates()
+        return {
+            'scale_factor_error': e.scale_factor_error.value,
+            'scale_factor_error_sigma': e.scale_factor_error.sigma,
+            'bias_rad_s': e.bias.value,
+            'bias_sigma_rad_s': e.bias.sigma,
+            'bias_drift_rad_s2': e.bias_drift.value,
+            'bias_drift_sigma_rad_s2': e.bias_drift.sigma,
+            'amplitude_encoder_rad': e.amplitude_encoder.value,
+            'amplitude_encoder_sigma_rad': e.amplitude_encoder.sigma,
+            'amplitude_gyro_rad': e.amplitude_gyro.value,
+            'amplitude_gyro_sigma_rad': e.amplitude_gyro.sigma,
+            'period_s': e.period_s,
+            'samples_gyro': e.samples_gyro,
+            'samples_encoder': e.samples_encoder,
+            'converged': bool(e.converged),
+            'noise_encoder_rad': e.noise_encoder_rad,
+            'noise_gyro_rad_sqrt_s': e.noise_gyro_arw,
+        }
+
+    def publish_estimates(self) -> None:
+        """Publish ``~/estimates`` (one status: OK when converged, WARN before)."""
+        values = self.estimate_values()
+        level = OK if values['converged'] else WARN
+        msg = 'converged' if values['converged'] else 'not converged yet'
+        status = diagnostic_status(DiagnosticStatus, KeyValue, f'{NAME}: estimates', level,
+                                   msg, self.p['hardware_id'], values)
+        self.estimates_pub.publish(diagnostic_array(
+            DiagnosticArray, self.get_clock().now().to_msg(), [status]))
+        self._converged = values['converged']
+
+    def health_status(self) -> tuple:
+        """Return (level, message, values) of the input health."""
+        now = time.time()
+        problems = []
+        values: Dict[str, Any] = {}
+        for h in (self.imu_health, self.enc_health):
+            problems += h.problems(now, self.p['stall_timeout_s'], self._last_diag.get(h.name))
+            self._last_diag[h.name] = h.as_dict()
+            values.update(self._last_diag[h.name])
+        skew = stream_skew_s(self.imu_health, self.enc_health)
+        if skew is not None:
+            values['stream_skew_s'] = skew
+            if abs(skew) > self.p['max_skew_s']:
+                problems.append(f'streams {skew:+.3f} s apart in time')
+        grew = self.missing_joint - self._last_diag.get('missing_joint', 0)
+        self._last_diag['missing_joint'] = self.missing_joint
+        if grew:
+            problems.append(f'{grew} JointState messages without joint {self._joint!r}')
+        values['encoder_dropped_missing_joint'] = self.missing_joint
+        values['filter_restarts'] = self.core_restarts
+        values['processing_errors'] = self.processing_errors
+        values['converged'] = self._converged
+        if not self._converged:
+            problems.append('filter not converged')
+        level = WARN if problems else OK
+        if self.processing_errors:
+            level = ERROR
+            problems.append(f'{self.processing_errors} chunks failed in the filter (see log)')
+        return level, '; '.join(problems) if problems else 'ok', values
+
+    def publish_diagnostics(self) -> None:
+        """Publish the input health and convergence on ``/diagnostics``."""
+        level, message, values = self.health_status()
+        status = diagnostic_status(DiagnosticStatus, KeyValue, f'{NAME}: inputs', level,
+                                   message, self.p['hardware_id'], values)
+        self.diag_pub.publish(diagnostic_array(
+            DiagnosticArray, self.get_clock().now().to_msg(), [status]))
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
+        self._imu_q.clear()
+        self._enc_q.clear()
+        for h in (self.imu_health, self.enc_health):
+            h.reset()
+        self._fed_last = {}
+        self.missing_joint = 0
+        self._last_diag = {}
+        self._configure()
+        self._converged = False
+        response.success = True
+        response.message = 'filter and input counters reset'
+        return response
+
+
+def main(args=None) -> int:
+    """Run the node (Jazzy idiom; exit 2 on an invalid parameter)."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = SwingKfNode()
+        spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except InvalidParameter as exc:
+        print(f'{NAME}: invalid parameter: {exc}', flush=True)
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
