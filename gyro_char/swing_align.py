@@ -45,6 +45,23 @@ def integrate(tau: np.ndarray, rate: np.ndarray) -> np.ndarray:
     return out
 
 
+def trapezoid_gain(dt: np.ndarray, period_s: float) -> float:
+    """
+    Gain of trapezoid integration of point rate samples on a sinusoid of period T.
+
+    Per step h the trapezoid increment of cos is (x / tan x) times the exact one, x = pi h / T
+    (about 1 - (2 pi h / T)^2 / 12: 3.3 ppm at h = 5 ms, T = 5 s), which would otherwise read as
+    a scale-factor error; the mean over the steps is exact for uniform steps and second order
+    in the jitter otherwise.
+    """
+    x = np.pi * np.asarray(dt, dtype=np.float64) / period_s
+    if x.size == 0:
+        return 1.0
+    small = np.abs(x) < 1e-4
+    g = np.where(small, 1.0 - x * x / 3.0, x / np.tan(np.where(small, 1.0, x)))
+    return float(g.mean())
+
+
 def check_stamps(t: np.ndarray, values: np.ndarray, what: str) -> None:
     """Refuse NaN/inf and stamps that are not strictly increasing, with counts."""
     if t.size < 2:

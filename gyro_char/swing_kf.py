@@ -19,7 +19,7 @@ from typing import List, Optional
 from filterpy.kalman import KalmanFilter
 from gyro_char import swing_batch
 from gyro_char.recordings import Recording
-from gyro_char.swing_align import align, AlignedSwing
+from gyro_char.swing_align import align, AlignedSwing, trapezoid_gain
 from gyro_char.swing_model import (
     combine, FilterResult, GYRO_ANCHOR_S, H, PRIOR_SD, SwingEstimates, SwingNoise, transition)
 import numpy as np
@@ -101,7 +101,10 @@ def estimate_swing(imu: Recording, encoder: Optional[Recording], period_s: float
         if res.noise_estimated:
             unit = 'rad' if what == 'encoder' else 'rad/sqrt(s)'
             notes.append(f'{what} noise estimated from the fit residuals: {res.noise:.3g} {unit}')
-    est = combine(enc, gyr, period_s, notes)
-    history = [combine(e, g, period_s) for e, g in zip(h_enc, h_gyr)]
+    gain = trapezoid_gain(np.diff(al.tau_gyro), period_s)
+    notes.append(f'gyro amplitude divided by the trapezoid-integration gain at the period, '
+                 f'{gain:.9f}')
+    est = combine(enc, gyr, period_s, notes, gyro_gain=gain)
+    history = [combine(e, g, period_s, gyro_gain=gain) for e, g in zip(h_enc, h_gyr)]
     h_tau = np.array([max(e.tau, g.tau) for e, g in zip(h_enc, h_gyr)])
     return SwingRun(est, al, enc, gyr, history, h_tau)

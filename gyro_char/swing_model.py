@@ -162,14 +162,18 @@ def _diff(a: Estimate, b: Estimate) -> Estimate:
 
 
 def combine(enc: FilterResult, gyro: FilterResult, period_s: float,
-            notes: Optional[List[str]] = None) -> SwingEstimates:
+            notes: Optional[List[str]] = None, gyro_gain: float = 1.0) -> SwingEstimates:
     """
     Estimates (1)-(3) from the two filters (independent sensors: variances add).
+
+    ``gyro_gain`` is the integration rule's gain at the swing period (``swing_align.
+    trapezoid_gain``); the gyro amplitude is divided by it.
 
     ``converged`` is True when both amplitudes are determined to better than 1 % (1 sigma) and the
     bias to better than the rate amplitude: a rough "enough data" flag for live use.
     """
     a_e, a_g = enc.amplitude(), gyro.amplitude()
+    a_g = Estimate(a_g.value / gyro_gain, a_g.sigma / gyro_gain, a_g.unit)
     rho = a_g.value / a_e.value - 1.0 if a_e.value > 0 else float('nan')
     rho_sigma = float(np.hypot(a_g.sigma / a_e.value, a_g.value * a_e.sigma / a_e.value ** 2)) \
         if a_e.value > 0 else float('nan')

@@ -15,7 +15,7 @@ that do not advance (duplicates, out of order) are dropped; gyro gaps longer tha
 from typing import List, Optional, Tuple
 
 from gyro_char import swing_batch
-from gyro_char.swing_align import GYRO_GAP_FACTOR
+from gyro_char.swing_align import GYRO_GAP_FACTOR, trapezoid_gain
 from gyro_char.swing_model import (
     combine, Estimate, FilterResult, SwingEstimates, SwingNoise)
 import numpy as np
@@ -61,6 +61,8 @@ class SwingOnline:
         self._gyr = _Stream(swing_batch.GYRO, self.noise.gyro_arw)
         self._gyro_last: Optional[Tuple[float, float, float]] = None  # tau, rate, angle
         self._dt_median = None
+        self._gain_sum = 0.0
+        self._gain_steps = 0
 
     # -- input ---------------------------------------------------------------------------------
     def _accept(self, s: _Stream, t: np.ndarray, y: np.ndarray) -> None:
@@ -113,6 +115,9 @@ class SwingOnline:
         rr = np.concatenate([[p_rate], rate])
         dt = np.diff(tt)
         angle = p_angle + np.cumsum(0.5 * (rr[1:] + rr[:-1]) * dt)
+        steps = dt if self._gyro_last is not None else dt[1:]
+        self._gain_sum += trapezoid_gain(steps, self.period_s) * steps.size
+        self._gain_steps += steps.size
         pos = dt[dt > 0]
         if pos.size:
             med = float(np.median(pos))
@@ -155,7 +160,8 @@ class SwingOnline:
                 Estimate(nan, nan, '1'), Estimate(nan, nan, 'rad/s'),
                 Estimate(nan, nan, 'rad/s^2'), e, e, self.period_s,
                 self._enc.state.count, self._gyr.state.count, False, notes=self.notes())
-        return combine(enc, gyr, self.period_s, self.notes())
+        gain = self._gain_sum / self._gain_steps if self._gain_steps else 1.0
+        return combine(enc, gyr, self.period_s, self.notes(), gyro_gain=gain)
 
     @property
     def rejected(self) -> Tuple[int, int]:
