@@ -1,0 +1,66 @@
+# End to end on the bench simulator (the paper's model): the swing estimates against the
+# simulator's truth, the CLI on a simulated bag-free CSV, and a small, fast version of the
+# Monte Carlo method-error study of bench/mc_swing.py.
+from gyro_char.bench_sim import simulate_swing
+from gyro_char.swing_kf import estimate_swing
+from gyro_char.swing_mc import monte_carlo, study_config
+from gyro_char.swing_online import SwingOnline
+import numpy as np
+import pytest
+
+
+@pytest.mark.parametrize('study', ['fog', 'mems'])
+def test_estimates_match_simulator_truth(study):
+    cfg = study_config(study)
+    sim = simulate_swing(cfg, duration=180.0, seed=7)
+    tr = sim.truth['swing']
+    res = estimate_swing(sim.imu, sim.encoder, tr['period_s'])
+    e = res.estimates
+    assert res.aligned.axis == 'gyro_x'
+    for key in ('scale_factor_error', 'bias', 'bias_drift'):
+        est = getattr(e, key)
+        assert abs(est.value - tr[key]) < 4.5 * est.sigma, (key, est, tr[key])
+    assert abs(e.amplitude_encoder.value - tr['amplitude']) < 1e-4 * tr['amplitude']
+    # The gyro noise level recovered from the residuals is the simulator's N.
+    n_true = sim.truth['channels']['gyro_x']['N']
+    assert e.noise_gyro_arw == pytest.approx(n_true, rel=0.1)
+
+
+def test_online_on_simulator_streams_matches_offline():
+    cfg = study_config('mems')
+    sim = simulate_swing(cfg, duration=60.0, seed=3, channels=('gyro_x',))
+    off = estimate_swing(sim.imu, sim.encoder, cfg.stand.period_s, axis='x')
+    al = off.aligned
+    on = SwingOnline(cfg.stand.period_s, t_ref=al.t_ref)
+    ti, te = al.t_ref + al.tau_gyro, al.t_ref + al.tau_encoder
+    for lo in range(0, ti.size, 997):  # IMU and encoder chunks of different sizes
+        on.add_imu(ti[lo:lo + 997], al.rate_gyro[lo:lo + 997])
+    for lo in range(0, te.size, 1500):
+        on.add_encoder(te[lo:lo + 1500], al.angle_encoder[lo:lo + 1500])
+    e_on, e_off = on.estimates(), off.estimates
+    for key in ('scale_factor_error', 'bias', 'bias_drift'):
+        a, b = getattr(e_on, key), getattr(e_off, key)
+        assert a.value == pytest.approx(b.value, rel=1e-6, abs=1e-3 * b.sigma)
+        assert a.sigma == pytest.approx(b.sigma, rel=1e-3)
+
+
+def test_monte_carlo_small():
+    # 24 short FOG runs: the errors scatter as the filter's sigma says, and the method error is
+    # far inside the paper's 0.999 bounds at this level of noise.
+    s = monte_carlo('fog', 24, duration=120.0, seed0=500)
+    for key in ('z_sfe', 'z_bias', 'z_drift'):
+        assert abs(s[key]['mean']) < 0.8, (key, s[key])
+        assert 0.55 < s[key]['std'] < 1.6, (key, s[key])
+    lo, hi = s['sfe_pp']['interval_normal']
+    assert -0.008 < lo and hi < 0.0498
+    assert s['bias_pct']['abs_bound_normal'] < 0.8
+
+
+def test_random_walk_tuning_beats_plain_tuning():
+    # MEMS: the angle random walk dominates the integrated angle's error; modelling it as
+    # process noise (Q33 = N^2 dt, R = 0) scatters less than the plain Q = 0, white-R tuning on
+    # the same records (see bench/mc_swing.py for the 1000-run figures).
+    s = monte_carlo('mems', 16, duration=120.0, seed0=600)
+    for key in ('sfe_pp', 'bias_pct', 'drift_pct'):
+        assert s[key]['std'] < s['plain_' + key]['std'], key
+    assert np.isfinite(s['drift_pct']['std'])
