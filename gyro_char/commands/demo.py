@@ -128,7 +128,8 @@ def run(args) -> int:
         if args.live:
             steps(f'live: bench_sim_node -> swing_kf_node, {args.live_duration:g} s simulated')
             from gyro_char.commands.demo_live import run_live
-            live = run_live(cfg, args.seed, args.live_duration, args.effect, log)
+            live = run_live(cfg, args.seed, args.live_duration, args.effect, log,
+                            config_file=args.config)
             if live.get('missing'):
                 missing.append(live['missing'])
         steps('tables')
@@ -136,6 +137,11 @@ def run(args) -> int:
     if effects:
         text += ['', 'effects added to both runs: '
                  + ', '.join(f'{e.name} {e.params}' for e in effects)]
+    if live and not live.get('missing'):
+        text.append(f'live node: {args.live_duration:g} s replayed at 3x real time over DDS '
+                    f'(seed {args.seed}), {live["samples_gyro"]} gyro + '
+                    f'{live["samples_encoder"]} encoder samples used, converged '
+                    f'{bool(live["converged"])}')
     for item in missing:
         text.append(f'missing: {item}')
     plots = sorted(str(p) for p in out.glob('*/*.png'))
