@@ -128,6 +128,8 @@ def decode_imu(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray
     size = sizes[idx]
     good &= (strlen >= 1) & (size >= need) & (size <= need + MAX_TRAILING)
     good &= _ascii_frames(buf, off + 16, np.where(good, strlen - 1, 0))
+    nul = np.where(good, off + 15 + strlen, off)  # rosbags requires the string's terminator
+    good &= buf[nul] == 0
     idx, off, big, a = idx[good], off[good], big[good], a[good]
     ok[:] = False
     ok[idx] = True
@@ -177,6 +179,8 @@ def _decode_uniform(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray):
         return None
     if strlen > 1 and np.any(rows[:, 16:15 + strlen] >= 0x80):
         return None  # non-ASCII frame_id: let rosbags judge its UTF-8
+    if np.any(rows[:, 15 + strlen] != 0):
+        return None  # a missing string terminator, which rosbags refuses
     sec = np.ascontiguousarray(rows[:, 4:8]).view(order + 'i4')[:, 0].astype(np.float64)
     nsec = np.ascontiguousarray(rows[:, 8:12]).view(order + 'u4')[:, 0].astype(np.float64)
     t = sec + nsec * 1e-9

@@ -93,8 +93,8 @@ def _report_units(rec: Recording) -> None:
     accel = [rec.channels.get(f'accel_{a}') for a in 'xyz']
     if all(a is not None and a.size for a in accel):
         step = max(1, accel[0].size // 100_000)  # a heuristic: a subsample is plenty
-        g = float(np.median(np.sqrt(accel[0][::step] ** 2 + accel[1][::step] ** 2
-                                    + accel[2][::step] ** 2)))
+        g = float(np.median(np.hypot(np.hypot(accel[0][::step], accel[1][::step]),
+                                     accel[2][::step])))
         if 0.5 < g < 2.0:
             rec.notes.append(f'warning: median |accel| is {g:.4g} m/s^2: looks like g in a m/s^2 '
                              f'field (values kept as given)')

@@ -1,0 +1,148 @@
+"""
+Fuzz the ingest: random byte mutations of small valid bags and of Imu payloads.
+
+Files: every mutated bag either reads (values may change: MCAP from rosbags carries no CRC) or
+raises InputError; any other exception fails. Payloads: whatever the vectorised decoder accepts,
+rosbags' deserializer must accept too, with the same stamp and values bit for bit.
+"""
+import shutil
+
+from bag_factory import imu_msg, imu_recording, STORE2
+from gyro_char.ingest.cdr import decode_imu
+from gyro_char.recordings import IMU_CHANNELS, InputError, read_imu, write_bag
+from msg_adapters import imu_sample
+import numpy as np
+import pytest
+
+CASES = {'mcap': 800, 'sqlite3': 300}
+PAYLOAD_CASES = 4000
+
+
+def _mutate(rng, data: bytes) -> bytes:
+    d = bytearray(data)
+    kind = rng.integers(0, 5)
+    if kind == 0:  # a few random bytes anywhere
+        for _ in range(int(rng.integers(1, 9))):
+            d[int(rng.integers(0, len(d)))] = int(rng.integers(0, 256))
+    elif kind == 1:  # truncation
+        d = d[:int(rng.integers(0, len(d)))]
+    elif kind == 2:  # a run of garbage
+        i = int(rng.integers(0, len(d)))
+        n = int(rng.integers(1, 64))
+        d[i:i + n] = rng.integers(0, 256, n, dtype=np.uint8).tobytes()
+    elif kind == 3:  # bytes near the start or end (headers, footers, summary, sqlite header)
+        for _ in range(int(rng.integers(1, 4))):
+            i = int(rng.integers(0, min(len(d), 200)))
+            d[i if rng.integers(0, 2) else len(d) - 1 - i] = int(rng.integers(0, 256))
+    else:  # a length-like field blown up
+        i = int(rng.integers(0, max(1, len(d) - 8)))
+        d[i:i + 8] = (int(rng.integers(0, 2**63))).to_bytes(8, 'little')
+    return bytes(d)
+
+
+@pytest.mark.parametrize('storage', sorted(CASES))
+def test_fuzz_bag_files(tmp_path, storage):
+    base = tmp_path / 'base'
+    write_bag(str(base), imu_recording(150), storage=storage)
+    name = next(p.name for p in base.iterdir() if p.name != 'metadata.yaml')
+    original = (base / name).read_bytes()
+    work = tmp_path / 'work'
+    shutil.copytree(base, work)
+    rng = np.random.default_rng(12345 if storage == 'mcap' else 54321)
+    outcomes = {'read': 0, 'InputError': 0}
+    for _ in range(CASES[storage]):
+        for side in work.glob(name + '-*'):  # sqlite journal files from a previous case
+            side.unlink()
+        (work / name).write_bytes(_mutate(rng, original))
+        try:
+            read_imu(str(work), quiet=True)
+            outcomes['read'] += 1
+        except InputError as exc:
+            assert '\n' not in str(exc)
+            outcomes['InputError'] += 1
+    # both outcomes must occur, or the mutations are not exercising anything
+    assert outcomes['read'] > 50 and outcomes['InputError'] > 50, outcomes
+
+
+def test_fuzz_bare_mcap(tmp_path):
+    base = tmp_path / 'base'
+    write_bag(str(base), imu_recording(100))
+    original = (base / 'base.mcap').read_bytes()
+    rng = np.random.default_rng(99)
+    target = tmp_path / 'x.mcap'
+    for _ in range(200):
+        target.write_bytes(_mutate(rng, original))
+        try:
+            read_imu(str(target), quiet=True)
+        except InputError:
+            pass
+
+
+def test_fuzz_payloads_match_rosbags():
+    rec = imu_recording(40, seed=2)
+    rng = np.random.default_rng(2024)
+    seeds = []
+    for i, t in enumerate(rec.t):
+        six = [float(rec.channels[k][i]) for k in IMU_CHANNELS]
+        msg = imu_msg(STORE2, t, six, frame_id='f' * int(rng.integers(0, 12)))
+        seeds.append(bytes(STORE2.serialize_cdr(msg, 'sensor_msgs/msg/Imu',
+                                                little_endian=bool(i % 2))))
+    payloads = []
+    for _ in range(PAYLOAD_CASES):
+        d = bytearray(seeds[int(rng.integers(0, len(seeds)))])
+        for _ in range(int(rng.integers(1, 4))):
+            where = rng.integers(0, 4)
+            if where == 0 and len(d) >= 16:  # encapsulation header and frame_id length
+                d[int(rng.integers(0, 16))] = int(rng.integers(0, 256))
+            elif where == 1:
+                d = d[:int(rng.integers(0, len(d) + 1))]
+            elif where == 2:
+                d += bytes(int(rng.integers(1, 9)))
+            elif len(d):
+                d[int(rng.integers(0, len(d)))] = int(rng.integers(0, 256))
+        payloads.append(bytes(d))
+    sizes = np.array([len(p) for p in payloads], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    buf = np.frombuffer(b''.join(payloads) + b'\0', np.uint8)
+    accepted = _check_against_rosbags(payloads, offsets, sizes, buf)
+    assert accepted > PAYLOAD_CASES // 4
+
+
+def test_fuzz_uniform_batches_match_rosbags():
+    """Equal-size payloads at a constant stride take the strided path; flip bytes in them."""
+    rec = imu_recording(30, seed=4)
+    rng = np.random.default_rng(77)
+    accepted = 0
+    for batch in range(150):
+        payloads = []
+        for i, t in enumerate(rec.t):
+            six = [float(rec.channels[k][i]) for k in IMU_CHANNELS]
+            d = bytearray(STORE2.serialize_cdr(imu_msg(STORE2, t, six), 'sensor_msgs/msg/Imu',
+                                               little_endian=bool(batch % 2)))
+            if rng.integers(0, 10) == 0:
+                d[int(rng.integers(0, 40))] = int(rng.integers(0, 256))
+            payloads.append(bytes(d))
+        stride = len(payloads[0]) + 5
+        buf = np.frombuffer(b''.join(p + b'gap!!' for p in payloads), np.uint8)
+        offsets = np.arange(len(payloads), dtype=np.int64) * stride
+        sizes = np.full(len(payloads), len(payloads[0]), dtype=np.int64)
+        accepted += _check_against_rosbags(payloads, offsets, sizes, buf)
+    assert accepted > 1000
+
+
+def _check_against_rosbags(payloads, offsets, sizes, buf):
+    """Return how many payloads the fast decoder accepted; each must equal rosbags' reading."""
+    t, values, ok = decode_imu(buf, offsets, sizes)
+    accepted = 0
+    for i, raw in enumerate(payloads):
+        try:
+            stamp, six = imu_sample(STORE2.deserialize_cdr(raw, 'sensor_msgs/msg/Imu'))
+        except Exception:  # noqa: B902 - rosbags refusing it is a valid outcome
+            assert not ok[i], f'case {i}: fast path accepted what rosbags refuses'
+            continue
+        if ok[i]:
+            accepted += 1
+            got = np.array([t[i]] + [values[k][i] for k in IMU_CHANNELS])
+            want = np.array([stamp] + list(six))
+            assert np.array_equal(got.view(np.int64), want.view(np.int64)), f'case {i}'
+    return accepted
