@@ -41,6 +41,11 @@ class SimRun:
     imu: Recording
     encoder: Optional[Recording]
     truth: dict
+    # Swing runs: this run's own bias and drift (rad/s, rad/s^2) - the parameters plus the
+    # least-squares line through the realized correlated noise (B, K, Q, R terms) of the swing
+    # axis over the run. The white noise is what an estimator's sigma covers; the correlated
+    # noise of one run is a real bias/drift of that run which truth.json's parameters omit.
+    realized: Optional[dict] = None
 
 
 def _config(config) -> BenchConfig:
@@ -116,7 +121,14 @@ def simulate_swing(config=None, *, duration: float = 900.0, seed: int = 0,
     }
     for effect in fx:
         effect.update_truth(ctx, truth)
-    return SimRun(imu=imu, encoder=encoder, truth=truth)
+    realized = {'bias': truth['swing']['bias'], 'bias_drift': truth['swing']['bias_drift']}
+    part = ctx.extras.get('colored_axis_noise')
+    if part is not None:
+        t = ctx.t - ctx.t.mean()
+        slope = float(np.dot(t, part - part.mean()) / np.dot(t, t))
+        realized['bias'] += float(part.mean() - slope * ctx.t.mean())
+        realized['bias_drift'] += slope
+    return SimRun(imu=imu, encoder=encoder, truth=truth, realized=realized)
 
 
 def simulate_static(config=None, *, duration: float = 3 * 3600.0, seed: int = 0,
@@ -173,12 +185,23 @@ def _imu_chain(cfg: BenchConfig, ctx: SimContext, fx: Sequence[Effect], n: int,
         if name not in channels:
             continue
         terms = cfg.channel_terms(name)
-        if any(terms.values()):
-            noise = noise_gen.generate(ni, dti, rng=ctx.rng(f'noise:{name}'), **terms)
-            if i < 3:
-                gyro[i] += noise
-            else:
-                accel[i - 3] += noise
+        if not any(terms.values()):
+            continue
+        # White part, then the correlated terms, from one stream (the draws come in the same
+        # order as one generate() call); the correlated part of the swing axis is kept to
+        # state this run's own bias and drift (SimRun.realized).
+        rng = ctx.rng(f'noise:{name}')
+        noise = noise_gen.generate(ni, dti, N=terms['N'], rng=rng) if terms['N'] else 0.0
+        colored = {k: v for k, v in terms.items() if k != 'N' and v}
+        if colored:
+            part = noise_gen.generate(ni, dti, rng=rng, **colored)
+            noise = noise + part
+            if i == ctx.axis:
+                ctx.extras['colored_axis_noise'] = part
+        if i < 3:
+            gyro[i] += noise
+        else:
+            accel[i - 3] += noise
 
     for effect in fx:
         gyro, accel = effect.sensor(ctx, gyro, accel)

@@ -162,3 +162,17 @@ def test_static_record_allan_matches_truth_on_every_channel():
         want = _adev_closed_form(terms, taus)
         # 2 h record: the 100 s point has ~70 equivalent degrees of freedom (~9 % 1-sigma).
         assert np.all(np.abs(got / want - 1.0) < np.array([0.05, 0.05, 0.12, 0.3])), name
+
+
+def test_realized_bias_and_drift_include_the_runs_correlated_noise():
+    cfg = noiseless(BenchConfig.from_preset('adis16405'))
+    cfg.noise['gyro_x']['K'] = 1e-4        # large rate random walk: the run's own drift
+    cfg.noise['gyro_x']['B'] = 1e-3
+    run = simulate_swing(cfg, duration=60.0, seed=12, channels=['gyro_x'])
+    t = run.imu.t
+    _, rate, _ = stand_motion(cfg.stand, t, np.random.default_rng(0))
+    resid = run.imu.channels['gyro_x'] - (1 + run.truth['swing']['scale_factor_error']) * rate
+    drift, bias = np.polyfit(t, resid, 1)
+    assert bias == pytest.approx(run.realized['bias'], abs=1e-9)
+    assert drift == pytest.approx(run.realized['bias_drift'], abs=1e-10)
+    assert abs(run.realized['bias'] - run.truth['swing']['bias']) > 1e-5

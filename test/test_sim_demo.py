@@ -44,5 +44,5 @@ def test_demo_live_nodes_over_loopback(tmp_path, capsys, monkeypatch):
     line = next(s for s in text.splitlines() if s.startswith('scale-factor error'))
     cells = line.split()
     # Same seed, same data: the live filter agrees with the offline one closely.
-    assert float(cells[7]) == pytest.approx(float(cells[3]), abs=0.5 * float(cells[4]))
+    assert float(cells[8]) == pytest.approx(float(cells[3]), abs=0.5 * float(cells[4]))
     assert os.path.getsize(out / 'demo.log') > 0

@@ -133,7 +133,8 @@ def run(args) -> int:
             if live.get('missing'):
                 missing.append(live['missing'])
         steps('tables')
-    text = table1(cfg, estimates, swing.truth, live) + [''] + table2(cfg, noise, static.truth)
+    text = table1(cfg, estimates, swing.truth, swing.realized, live) + ['']
+    text += table2(cfg, noise, static.truth)
     if effects:
         text += ['', 'effects added to both runs: '
                  + ', '.join(f'{e.name} {e.params}' for e in effects)]
@@ -156,9 +157,16 @@ def _fmt(x, digits=4) -> str:
     return '-' if x is None else f'{x:+.{digits}g}'
 
 
-def table1(cfg, est: dict, truth: dict, live=None) -> list:
-    """Paper's Table 1 layout: estimate +- filter sigma, truth, the paper's run-to-run values."""
-    t = truth['swing']
+def table1(cfg, est: dict, truth: dict, realized: dict, live=None) -> list:
+    """
+    Paper's Table 1 layout: estimate +- filter sigma beside the truth.
+
+    Two truths: the parameters (truth.json) and this run's own bias and drift, which include
+    the run's realized flicker / rate random walk (``SimRun.realized``); the last column is the
+    estimate's error against the latter in filter sigmas.
+    """
+    t = dict(truth['swing'])
+    run = {**t, **(realized or {})}
     paper = PAPER_TABLE1.get(cfg.preset, {}).get(cfg.gyro.axis)
     rows = [('scale-factor error, %', 'scale_factor_error', 100.0, 0),
             ('bias, deg/s', 'bias', 1.0 / DEG, 2),
@@ -166,22 +174,24 @@ def table1(cfg, est: dict, truth: dict, live=None) -> list:
     head = (f'Table 1. Swing-stand calibration, {cfg.preset} gyro_{cfg.gyro.axis}, '
             f'T = {cfg.stand.period_s:g} s, A = {cfg.stand.amplitude / DEG:g} deg, '
             f'seed {truth["seed"]}')
-    lines = [head, f'{"":26s}{"estimate":>12s}{"1 sigma":>10s}{"truth":>12s}{"error/sigma":>13s}'
-             + ('   live node' if live else '') + ('   paper (mean, 1 sigma)' if paper else '')]
+    lines = [head, f'{"":26s}{"estimate":>10s}{"1 sigma":>9s}{"truth":>10s}{"this run":>10s}'
+             f'{"err/sigma":>10s}' + ('  live node' if live else '')
+             + ('   paper (mean, 1 sigma)' if paper else '')]
     for label, key, scale, pcol in rows:
         e = est[key]
-        value, sigma, true = e['value'] * scale, e['sigma'] * scale, t[key] * scale
-        z = (value - true) / sigma if sigma else float('nan')
-        line = f'{label:26s}{value:12.4f}{sigma:10.4f}{true:12.4f}{z:13.1f}'
+        value, sigma = e['value'] * scale, e['sigma'] * scale
+        true, this = t[key] * scale, run[key] * scale
+        z = (value - this) / sigma if sigma else float('nan')
+        line = f'{label:26s}{value:10.4f}{sigma:9.4f}{true:10.4f}{this:10.4f}{z:10.1f}'
         if live:
             lv = live.get(key)
-            line += f'{lv * scale:12.4f}' if lv is not None else f'{"-":>12s}'
+            line += f'{lv * scale:11.4f}' if lv is not None else f'{"-":>11s}'
         if paper:
             line += f'   {paper[pcol]:+.2f} ({paper[pcol + 1]:.2f})'
         lines.append(line)
-    lines.append('1 sigma: from the filter covariance, which models white noise only; the '
-                 'flicker (B) and rate random walk (K) of a run can put bias and drift '
-                 'errors at 2-3 sigma.')
+    lines.append('truth: the simulator parameters; this run: plus the line through the '
+                 'flicker (B) and rate random walk (K) of this run, which the filter 1 sigma '
+                 '(white noise only) does not cover.')
     return lines
 
 
