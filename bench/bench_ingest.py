@@ -74,7 +74,8 @@ def bench(n: int, subset: int, workdir: Path) -> bool:
         ok &= same and len(fast) == n
         fast_rate, slow_rate = n / t_fast, m / t_slow
         print(f'[{storage}] write {t_write:.2f} s ({size / 1e6:.0f} MB) | fast read '
-              f'{t_fast:.2f} s = {fast_rate / 1e6:.2f} M msg/s (+ sanitize {t_san:.2f} s) | rosbags '
+              f'{t_fast:.2f} s = {fast_rate / 1e6:.2f} M msg/s (+ sanitize {t_san:.2f} s) | '
+              f'rosbags '
               f'per-message {slow_rate / 1e6:.3f} M msg/s (timed on the first {m} messages, '
               f'extrapolated to {n / slow_rate:.1f} s for all) | speed-up '
               f'{fast_rate / slow_rate:.1f}x | bit-for-bit equal on those {m}: {same}')
