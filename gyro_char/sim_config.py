@@ -20,6 +20,7 @@ from gyro_char.recordings import InputError
 
 AXES = ('x', 'y', 'z')
 TERMS = ('N', 'B', 'K', 'Q', 'R')
+_TEXT = {'axis', 'quantizer'}
 # Fields that may be negative (signed errors and angles); every other number must be >= 0.
 _SIGNED = {'phase', 'offset', 'drift_rate', 'drift_accel', 'scale_factor_error', 'bias',
            'bias_drift', 'misalignment'}
@@ -173,7 +174,7 @@ def _check_number(section: str, name: str, value) -> None:
         for key, item in value.items():
             _check_number(section, f'{name}.{key}', item)
         return
-    if isinstance(value, str):
+    if isinstance(value, str) and name in _TEXT:
         return
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputError(f'{section}.{name} must be a number, got {value!r}')
