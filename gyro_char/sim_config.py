@@ -199,11 +199,11 @@ def noiseless(cfg: BenchConfig, keep_errors: bool = True) -> BenchConfig:
     e.level_step = e.word_step = e.adc_noise = e.jitter_s = 0.0
     g.jitter_s = g.output_step = g.misalignment_noise = 0.0
     out.accel.output_step = 0.0
-    out.noise = {ch: {t: 0.0 for t in TERMS} for ch in out.noise}
+    out.noise = {ch: dict.fromkeys(TERMS, 0.0) for ch in out.noise}
     if not keep_errors:
         s.offset = s.drift_rate = s.drift_accel = 0.0
         g.misalignment = 0.0
         for key in ('scale_factor_error', 'bias', 'bias_drift'):
-            setattr(g, key, {a: 0.0 for a in AXES})
-        out.accel.bias = {a: 0.0 for a in AXES}
+            setattr(g, key, dict.fromkeys(AXES, 0.0))
+        out.accel.bias = dict.fromkeys(AXES, 0.0)
     return out
