@@ -146,3 +146,40 @@ def _check_against_rosbags(payloads, offsets, sizes, buf):
             want = np.array([stamp] + list(six))
             assert np.array_equal(got.view(np.int64), want.view(np.int64)), f'case {i}'
     return accepted
+
+
+def test_fuzz_scalar_blocks_match_rosbags():
+    """JointState blocks with flipped bytes: an accepted block equals rosbags message by message."""
+    from bag_factory import joint_msg
+    from gyro_char.ingest.cdr_scalar import decode_scalar, JOINT_STATE
+    from msg_adapters import joint_angle
+    rng = np.random.default_rng(31)
+    accepted = 0
+    for batch in range(300):
+        t = 1.7e9 + np.arange(20) * 0.01 + batch
+        payloads = []
+        victim = int(rng.integers(0, 40))  # half of the batches get one flipped byte
+        for k in range(20):
+            d = bytearray(STORE2.serialize_cdr(
+                joint_msg(t[k], ['a', 'stand_joint'], [1.0, 0.1 * k]), JOINT_STATE,
+                little_endian=bool(batch % 2)))
+            if k == victim:
+                d[int(rng.integers(0, len(d)))] = int(rng.integers(0, 256))
+            payloads.append(bytes(d))
+        size = len(payloads[0])
+        buf = np.frombuffer(b''.join(payloads), np.uint8)
+        joint = 'stand_joint' if batch % 3 else 1
+
+        def sample(msg, joint=joint):
+            return joint_angle(msg, joint)
+        got = decode_scalar(buf, np.arange(20, dtype=np.int64) * size, np.full(20, size),
+                            JOINT_STATE, joint, STORE2, sample)
+        if got is None:
+            continue
+        accepted += 1
+        for k, raw in enumerate(payloads):
+            ref = sample(STORE2.deserialize_cdr(raw, JOINT_STATE))
+            assert ref is not None
+            assert np.array([got[0][k], got[1][k]]).view(np.int64).tolist() == \
+                np.array(ref).view(np.int64).tolist()
+    assert accepted > 100

@@ -4,8 +4,9 @@ import shutil
 
 from bag_factory import (imu_msg, imu_recording, joint_msg, STORE2, vector3_msg, write_ros1,
                          write_ros2)
-from gyro_char.ingest.bag_read import read_imu_bag
-from gyro_char.recordings import IMU_CHANNELS, InputError, read_encoder, read_imu, write_bag
+from gyro_char.ingest.bag_read import read_encoder_bag, read_imu_bag
+from gyro_char.recordings import (IMU_CHANNELS, InputError, read_encoder, read_imu, Recording,
+                                  write_bag)
 import numpy as np
 import pytest
 
@@ -113,3 +114,38 @@ def test_not_a_bag(tmp_path):
     (tmp_path / 'x.txt').write_text('hello')
     with pytest.raises(InputError, match='unknown input type'):
         read_imu(str(tmp_path / 'x.txt'))
+
+
+def _same_encoder(path, **kw):
+    fast = read_encoder_bag(Path(path), quiet=True, **kw)
+    slow = read_encoder_bag(Path(path), quiet=True, fast=False, **kw)
+    assert np.array_equal(fast.t, slow.t)
+    assert np.array_equal(fast.channels['encoder'], slow.channels['encoder'])
+    assert fast.notes == slow.notes
+    return fast
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_encoder_fast_path_equals_rosbags(tmp_path, storage):
+    rec = imu_recording(400, seed=8)
+    enc = Recording(rec.t, {'encoder': np.sin(rec.t)})
+    write_bag(str(tmp_path / 'w'), rec, enc, storage=storage)
+    got = _same_encoder(tmp_path / 'w', joint='stand_joint')
+    assert np.array_equal(got.channels['encoder'], enc.channels['encoder'])
+    _same_encoder(tmp_path / 'w', joint=0)
+    # joints in varying order and sometimes absent: per-message path, missing ones counted
+    rng = np.random.default_rng(8)
+    msgs = []
+    for k, t in enumerate(rec.t):
+        names = [['stand_joint', 'b'], ['b', 'stand_joint'], ['b']][int(rng.integers(0, 3))]
+        msgs.append((t, joint_msg(t, names, [0.25 * k if n == 'stand_joint' else -1.0
+                                             for n in names]), bool(rng.integers(0, 2))))
+    vec = [(t, vector3_msg(t, t - rec.t[0]), True) for t in rec.t]
+    path = write_ros2(tmp_path / 'm', {'/js': ('sensor_msgs/msg/JointState', msgs),
+                                       '/v': ('geometry_msgs/msg/Vector3Stamped', vec)},
+                      storage)
+    got = _same_encoder(path, topic='/js', joint='stand_joint')
+    assert any('without joint' in n for n in got.notes)
+    _same_encoder(path, topic='/js', joint=1)
+    v = _same_encoder(path, topic='/v')
+    assert np.array_equal(v.channels['encoder'], rec.t - rec.t[0])
