@@ -25,6 +25,7 @@ from typing import Iterable, Optional, Sequence
 
 from gyro_char import noise_gen
 from gyro_char.effects import build_effects, Effect, SimContext
+from gyro_char.progress import progress
 from gyro_char.recordings import (
     ACCEL_CHANNELS, ENCODER_CHANNEL, GYRO_CHANNELS, IMU_CHANNELS, InputError, Recording)
 from gyro_char.sim_chain import (
@@ -80,7 +81,8 @@ def _select(channels: Optional[Iterable[str]]) -> tuple:
 
 
 def simulate_swing(config=None, *, duration: float = 900.0, seed: int = 0,
-                   effects: Sequence = (), channels: Optional[Iterable[str]] = None) -> SimRun:
+                   effects: Sequence = (), channels: Optional[Iterable[str]] = None,
+                   quiet: bool = True) -> SimRun:
     """
     Simulate a swing-stand run: IMU at ``gyro.rate_hz``, encoder at ``encoder.rate_hz``.
 
@@ -93,7 +95,7 @@ def simulate_swing(config=None, *, duration: float = 900.0, seed: int = 0,
     ctx = SimContext(config=cfg, kind='swing', seed=int(seed), dt=1.0 / cfg.gyro.rate_hz,
                      axis=AXES.index(cfg.gyro.axis))
     ctx.stand_angle = lambda t: stand_angle_clean(cfg.stand, t)
-    imu, truth_channels = _imu_chain(cfg, ctx, fx, n, _select(channels))
+    imu, truth_channels = _imu_chain(cfg, ctx, fx, n, _select(channels), quiet)
 
     ne = int(round(duration * cfg.encoder.rate_hz))
     te = sample_times(ne, 1.0 / cfg.encoder.rate_hz, cfg.encoder.jitter_s,
@@ -132,14 +134,15 @@ def simulate_swing(config=None, *, duration: float = 900.0, seed: int = 0,
 
 
 def simulate_static(config=None, *, duration: float = 3 * 3600.0, seed: int = 0,
-                    effects: Sequence = (), channels: Optional[Iterable[str]] = None) -> SimRun:
+                    effects: Sequence = (), channels: Optional[Iterable[str]] = None,
+                    quiet: bool = True) -> SimRun:
     """Simulate a static record at ``gyro.static_rate_hz`` (sensor level, at rest, z up)."""
     cfg = _config(config)
     fx = build_effects(effects)
     n = _check_run(duration, seed, cfg.gyro.static_rate_hz)
     ctx = SimContext(config=cfg, kind='static', seed=int(seed),
                      dt=1.0 / cfg.gyro.static_rate_hz, axis=AXES.index(cfg.gyro.axis))
-    imu, truth_channels = _imu_chain(cfg, ctx, fx, n, _select(channels))
+    imu, truth_channels = _imu_chain(cfg, ctx, fx, n, _select(channels), quiet)
     truth = _truth('static', cfg, seed, fx, truth_channels)
     for effect in fx:
         effect.update_truth(ctx, truth)
@@ -147,7 +150,7 @@ def simulate_static(config=None, *, duration: float = 3 * 3600.0, seed: int = 0,
 
 
 def _imu_chain(cfg: BenchConfig, ctx: SimContext, fx: Sequence[Effect], n: int,
-               channels: tuple):
+               channels: tuple, quiet: bool = True):
     """Run the gyro and accelerometer chain; return the IMU Recording and truth channels."""
     ctx.oversample = max([1] + [int(e.oversample(ctx)) for e in fx])
     d = ctx.oversample
@@ -181,7 +184,9 @@ def _imu_chain(cfg: BenchConfig, ctx: SimContext, fx: Sequence[Effect], n: int,
     accel = ctx.specific_force.copy()
     for i, ax in enumerate(AXES):
         accel[i] += cfg.accel.bias[ax]
-    for i, name in enumerate(IMU_CHANNELS):
+    bar = progress(IMU_CHANNELS, desc=f'simulating {ctx.kind} noise', quiet=quiet,
+                   unit='channel')
+    for i, name in enumerate(bar):
         if name not in channels:
             continue
         terms = cfg.channel_terms(name)

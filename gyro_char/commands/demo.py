@@ -103,7 +103,7 @@ def run(args) -> int:
         steps(f'simulating a {args.swing_duration:g} s swing run ({cfg.preset}, '
               f'{cfg.gyro.rate_hz:g} Hz gyro + encoder)')
         swing = simulate_swing(cfg, duration=args.swing_duration, seed=args.seed,
-                               effects=effects)
+                               effects=effects, quiet=args.quiet)
         swing_bag = write_record(str(out / 'swing'), swing, quiet=args.quiet, overwrite=True)
         steps('gyro-char swing on the recorded bag (Kalman filters on encoder and gyro angle)')
         axis = cfg.gyro.axis
@@ -113,7 +113,7 @@ def run(args) -> int:
         steps(f'simulating a {args.static_duration:g} s static record '
               f'({cfg.gyro.static_rate_hz:g} Hz, 6 channels)')
         static = simulate_static(cfg, duration=args.static_duration, seed=args.seed + 1,
-                                 effects=effects)
+                                 effects=effects, quiet=args.quiet)
         static_bag = write_record(str(out / 'static'), static, quiet=args.quiet,
                                   overwrite=True)
         noise = None

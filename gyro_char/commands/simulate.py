@@ -98,10 +98,12 @@ def run(args) -> int:
     effects = build_effects(args.effect)
     if args.kind == 'swing':
         duration = 900.0 if args.duration is None else args.duration
-        sim = simulate_swing(cfg, duration=duration, seed=args.seed, effects=effects)
+        sim = simulate_swing(cfg, duration=duration, seed=args.seed, effects=effects,
+                             quiet=args.quiet)
     else:
         duration = 10800.0 if args.duration is None else args.duration
-        sim = simulate_static(cfg, duration=duration, seed=args.seed, effects=effects)
+        sim = simulate_static(cfg, duration=duration, seed=args.seed, effects=effects,
+                              quiet=args.quiet)
     path = write_record(args.out, sim, args.storage, quiet=args.quiet,
                         overwrite=args.overwrite)
     n_enc = len(sim.encoder) if sim.encoder is not None else 0
