@@ -149,7 +149,7 @@ def _check_against_rosbags(payloads, offsets, sizes, buf):
 
 
 def test_fuzz_scalar_blocks_match_rosbags():
-    """JointState blocks with flipped bytes: an accepted block equals rosbags message by message."""
+    """Flip bytes in JointState blocks: an accepted block equals rosbags, message by message."""
     from bag_factory import joint_msg
     from gyro_char.ingest.cdr_scalar import decode_scalar, JOINT_STATE
     from msg_adapters import joint_angle
