@@ -154,8 +154,13 @@ def test_separate_process_static_run_over_loopback(monkeypatch):
     assert len(found) == 1
 
 
-def test_bad_parameter_exits_2():
-    proc = subprocess.run(_node_cmd('kind:=moving'), env=_env(), capture_output=True,
-                          timeout=60)
+@pytest.mark.parametrize('param,message', [
+    ('kind:=moving', b'kind must be swing or static'),
+    ('seed:=abc', b'expecting type'),
+    ('rate_factor:=-1.0', b'out of range'),
+    ("effects:=['warp_drive']", b'unknown effect'),
+])
+def test_bad_parameter_exits_2(param, message):
+    proc = subprocess.run(_node_cmd(param), env=_env(), capture_output=True, timeout=60)
     assert proc.returncode == 2
-    assert b'kind must be swing or static' in proc.stdout + proc.stderr
+    assert message in proc.stdout + proc.stderr

@@ -19,7 +19,9 @@ import numpy as np
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 import rclpy
-from rclpy.exceptions import InvalidParameterValueException
+from rclpy.exceptions import (
+    InvalidParameterTypeException, InvalidParameterValueException,
+    ParameterUninitializedException)
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
@@ -73,7 +75,7 @@ class BenchSimNode(Node):
             elif limits:
                 desc.integer_range = limits
             self.declare_parameter(name, default, desc)
-        self.p = {name: self.get_parameter(name).value for name in PARAMS}
+        self.p = {name: self._value(name) for name in PARAMS}
         reason = self._check(self.p)
         if reason:
             raise InputError(reason)
@@ -96,6 +98,15 @@ class BenchSimNode(Node):
         self.stamp_base_ns = int(self.get_clock().now().nanoseconds)
         self._start_run(0.0)
         self.create_timer(self.p['publish_period_s'], self._tick)
+
+    def _value(self, name: str) -> Any:
+        try:
+            return self.get_parameter(name).value
+        except ParameterUninitializedException:
+            # An empty YAML/CLI list ('effects:=[]') has no element type to declare with.
+            if name == 'effects':
+                return []
+            raise InputError(f'parameter {name} has no value') from None
 
     @staticmethod
     def _check(values: dict) -> Optional[str]:
@@ -199,7 +210,7 @@ def main(args=None) -> int:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (InputError, InvalidParameterValueException) as exc:
+    except (InputError, InvalidParameterValueException, InvalidParameterTypeException) as exc:
         print(f'{NAME}: {exc}', flush=True)
         return 2
     finally:
