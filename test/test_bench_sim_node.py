@@ -156,8 +156,6 @@ def test_separate_process_static_run_over_loopback(monkeypatch):
 
 @pytest.mark.parametrize('param,message', [
     ('kind:=moving', b'kind must be swing or static'),
-    ('seed:=abc', b'expecting type'),
-    ('rate_factor:=-1.0', b'out of range'),
     ("effects:=['warp_drive']", b'unknown effect'),
 ])
 def test_bad_parameter_exits_2(param, message):
