@@ -47,7 +47,7 @@ def register(subparsers) -> None:
                    help='also run bench_sim_node -> swing_kf_node on a loopback ROS graph')
     p.add_argument('--live-duration', type=float, default=120.0, metavar='S',
                    help='simulated seconds replayed through the live nodes')
-    add_common(p, default_out='demo_out')
+    add_common(p, default_out='out/demo')
     p.set_defaults(func=run)
 
 

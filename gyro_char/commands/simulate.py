@@ -31,7 +31,7 @@ def register(subparsers) -> None:
     p.add_argument('--list-effects', action='store_true', help='print the catalogue and exit')
     p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
     p.add_argument('--overwrite', action='store_true', help='replace an existing record')
-    add_common(p, default_out='simulate_out')
+    add_common(p, default_out='out/simulate')
     p.set_defaults(func=run)
 
 
