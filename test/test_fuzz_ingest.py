@@ -14,7 +14,7 @@ from msg_adapters import imu_sample
 import numpy as np
 import pytest
 
-CASES = {'mcap': 800, 'sqlite3': 300}
+CASES = {'mcap': 600, 'sqlite3': 250}
 PAYLOAD_CASES = 4000
 
 

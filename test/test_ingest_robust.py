@@ -31,8 +31,8 @@ def _damaged(tmp_path, storage, how):
     return str(dst)
 
 
-@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
-@pytest.mark.parametrize('how', ['truncated', 'garbage'])
+@pytest.mark.parametrize('storage,how', [('mcap', 'garbage'), ('sqlite3', 'garbage'),
+                                         ('sqlite3', 'truncated')])
 def test_damaged_bag_one_line_error(tmp_path, storage, how):
     path = _damaged(tmp_path, storage, how)
     with pytest.raises(InputError) as info:
@@ -40,12 +40,29 @@ def test_damaged_bag_one_line_error(tmp_path, storage, how):
     assert '\n' not in str(info.value) and path in str(info.value)
 
 
+def test_truncated_mcap_is_read_up_to_the_cut(tmp_path):
+    """A recording killed mid-write has no summary: read what is there, and say so."""
+    rec = imu_recording(20000)
+    write_bag(str(tmp_path / 'b'), rec)
+    f = _bag_file(tmp_path / 'b')
+    data = f.read_bytes()
+    f.write_bytes(data[:int(len(data) * 0.6)])
+    got = read_imu(str(tmp_path / 'b'))
+    assert 10000 < len(got) < 12000
+    assert np.array_equal(got.channels['gyro_x'], rec.channels['gyro_x'][:len(got)])
+    assert any('has no index' in n for n in got.notes)
+    assert any('ends inside a record at byte' in n for n in got.notes)
+    f.write_bytes(data[:1000])  # cut before any message
+    with pytest.raises(InputError):
+        read_imu(str(tmp_path / 'b'))
+
+
 def test_cli_exit_code_2_one_line(tmp_path, capsys):
-    path = _damaged(tmp_path, 'mcap', 'truncated')
+    path = _damaged(tmp_path, 'mcap', 'garbage')
     code = cli.main(['swing', path, '--period', '2', '--out', str(tmp_path / 'o'), '--quiet'])
     err = capsys.readouterr().err.strip()
     assert code == 2
-    assert len(err.splitlines()) == 1 and 'truncated or corrupt' in err
+    assert len(err.splitlines()) == 1 and 'corrupt MCAP chunk' in err
 
 
 def test_undecodable_messages_are_counted(tmp_path):
@@ -112,3 +129,24 @@ def test_unreadable_file(tmp_path):
     p.write_bytes(os.urandom(100))
     with pytest.raises(InputError, match='cannot open bag'):
         read_imu(str(p))
+
+
+def test_mcap_chunk_crc_checked_when_present(tmp_path):
+    import struct
+    import zlib
+    write_bag(str(tmp_path / 'b'), imu_recording(2000))
+    f = _bag_file(tmp_path / 'b')
+    data = bytearray(f.read_bytes())
+    pos = 8
+    while data[pos] != 0x06:  # first chunk record
+        pos += 9 + struct.unpack_from('<Q', data, pos + 1)[0]
+    start = pos + 9
+    usize = struct.unpack_from('<Q', data, start + 16)[0]
+    records = start + 40  # no compression: empty compression string
+    struct.pack_into('<I', data, start + 24, zlib.crc32(data[records:records + usize]))
+    f.write_bytes(bytes(data))
+    assert len(read_imu(str(tmp_path / 'b'))) == 2000  # a correct CRC passes
+    data[records + usize - 100] ^= 0xFF  # one payload byte of the chunk's last message
+    f.write_bytes(bytes(data))
+    with pytest.raises(InputError, match='CRC mismatch'):
+        read_imu(str(tmp_path / 'b'))

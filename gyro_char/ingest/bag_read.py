@@ -14,7 +14,7 @@ from typing import Dict, Iterator, List, Optional, Tuple, Union
 from gyro_char.ingest.bag_write import typestore
 from gyro_char.ingest.cdr import decode_imu
 from gyro_char.ingest.cdr_scalar import decode_scalar
-from gyro_char.ingest.mcap_scan import McapTopicScan
+from gyro_char.ingest.mcap_scan import list_channels, McapTopicScan
 from gyro_char.progress import progress
 from gyro_char.recordings import ENCODER_CHANNEL, IMU_CHANNELS, InputError, Recording
 from msg_adapters import imu_sample, joint_angle, vector3_x
@@ -46,27 +46,51 @@ class Bag:
         if path.is_file() and path.suffix not in ('.mcap', '.bag', '.db3'):
             raise InputError(f'{path}: unknown input type (expected a bag directory, .mcap, '
                              f'.bag or .csv/.csv.gz)')
+        self.notes: List[str] = []
+        self.scans: List[McapTopicScan] = []
+        self.recovered: Optional[Dict[str, str]] = None  # topic -> type, for a cut-short MCAP
         try:
             self.reader = AnyReader([path], default_typestore=typestore())
             self.reader.open()
-        except READ_ERRORS as exc:
-            raise InputError(f'{path}: cannot open bag (truncated or corrupt?): '
-                             f'{_first_line(exc)}') from None
         except Exception as exc:  # noqa: B902 - rosbags' own error classes derive from Exception
-            raise InputError(f'{path}: cannot open bag (truncated or corrupt?): '
-                             f'{_first_line(exc)}') from None
+            self.reader = None
+            self._recover(f'{path}: cannot open bag (truncated or corrupt?): {_first_line(exc)}')
+
+    def _recover(self, reason: str) -> None:
+        """Read an MCAP that was never closed (no summary) from the start, or raise ``reason``."""
+        files = list(self.path.glob('*.mcap')) if self.path.is_dir() else [self.path]
+        if len(files) != 1 or files[0].suffix != '.mcap':
+            raise InputError(reason)
+        try:
+            found = list_channels(str(files[0]))
+        except Exception:  # noqa: B902 - any failure here means: not recoverable
+            found = {}
+        if not found:
+            raise InputError(reason)
+        self.recovered = found
+        self.notes.append(f'{files[0].name} has no index (recording cut short?): read from the '
+                          f'start; topics first announced later are not seen')
 
     def __enter__(self) -> 'Bag':
         return self
 
     def __exit__(self, *exc) -> None:
         try:
-            self.reader.close()
+            if self.reader is not None:
+                self.reader.close()
         except Exception:  # noqa: B902 - closing a damaged bag must not mask the real error
             pass
 
+    def total(self, topic: str) -> Optional[int]:
+        """Message count of ``topic`` from the bag's index (None when there is no index)."""
+        if self.recovered is not None:
+            return None
+        return sum(c.msgcount for c in self.connections(topic))
+
     def topics(self) -> Dict[str, Tuple[str, int]]:
-        """Topic -> (message type, count)."""
+        """Topic -> (message type, count); count -1 when the bag has no index."""
+        if self.recovered is not None:
+            return {t: (k, -1) for t, k in self.recovered.items()}
         out: Dict[str, Tuple[str, int]] = {}
         for conn in self.reader.connections:
             kind, count = out.get(conn.topic, (conn.msgtype, 0))
@@ -90,7 +114,7 @@ class Bag:
         kind, count = table[name]
         if kind not in types:
             raise InputError(f'{self.path}: topic {name} carries {kind}, not {" or ".join(types)}')
-        if count == 0:
+        if count == 0:  # -1: unknown (no index)
             raise InputError(f'{self.path}: topic {name} has no messages')
         return name
 
@@ -106,6 +130,8 @@ class Bag:
 
     def storage(self) -> str:
         """'sqlite3' or 'mcap' for raw-CDR files the fast path reads, else 'other'."""
+        if self.recovered is not None:
+            return 'mcap'
         if self.path.is_file():
             return {'.mcap': 'mcap', '.db3': 'sqlite3'}.get(self.path.suffix, 'other')
         meta = self._metadata()
@@ -116,6 +142,8 @@ class Bag:
     def files(self) -> List[Path]:
         if self.path.is_file():
             return [self.path]
+        if self.recovered is not None:
+            return list(self.path.glob('*.mcap'))
         return [self.path / Path(p).name for p in self._metadata()['relative_file_paths']]
 
     def messages(self, topic: str, desc: str, quiet: bool) -> Iterator:
@@ -163,15 +191,26 @@ def _payload_blocks(bag: Bag, topic: str) -> Iterator[Tuple]:
     files = bag.files()
     if bag.storage() == 'sqlite3':
         return _sqlite_blocks(files, topic)
-    return (b for f in files for b in McapTopicScan(str(f), topic).blocks())
+    bag.scans = [McapTopicScan(str(f), topic, tolerate_truncation=bag.recovered is not None)
+                 for f in files]
+    return (b for scan in bag.scans for b in scan.blocks())
+
+
+def _bag_notes(bag: Bag) -> List[str]:
+    notes = list(bag.notes)
+    for scan in bag.scans:
+        if scan.truncated_at is not None:
+            notes.append(f'{Path(scan.path).name} ends inside a record at byte '
+                         f'{scan.truncated_at}: the messages before it were read')
+    return notes
 
 
 def _fast_imu(bag: Bag, topic: str, quiet: bool) -> Recording:
     blocks = _payload_blocks(bag, topic)
     store = typestore()
-    total = sum(c.msgcount for c in bag.connections(topic))
+    total = bag.total(topic)
     # decode straight into preallocated outputs: fresh memory is the costly part at this size
-    out = _Columns(total)
+    out = _Columns(total or 1 << 16)
     with progress(total=total, desc=f'reading {topic}', quiet=quiet, unit='msg') as bar:
         for buf, offsets, sizes in blocks:
             t, values, ok = decode_imu(buf, offsets, sizes)
@@ -240,7 +279,7 @@ def _assemble(bag: Bag, topic: str, ts, chans, bad: int) -> Recording:
     if t.size == 0:
         raise InputError(f'{bag.path}: no decodable messages on {topic}'
                          + (f' ({bad} undecodable)' if bad else ''))
-    notes = []
+    notes = _bag_notes(bag)
     if bad:
         notes.append(f'{bad} undecodable message(s) on {topic} dropped')
     absent = [k for k, v in channels.items() if np.all(np.isnan(v))]
@@ -273,7 +312,7 @@ def _fast_encoder(bag: Bag, topic: str, msgtype: str, sample, joint, quiet: bool
     """Block-wise scalar decoding; per-message rosbags deserialisation for odd blocks."""
     store = typestore()
     ts, vs, bad, missing = [], [], 0, 0
-    total = sum(c.msgcount for c in bag.connections(topic))
+    total = bag.total(topic)
     with progress(total=total, desc=f'reading {topic}', quiet=quiet, unit='msg') as bar:
         for buf, offsets, sizes in _payload_blocks(bag, topic):
             got = decode_scalar(buf, offsets, sizes, msgtype, joint, store, sample)
@@ -343,7 +382,7 @@ def read_encoder_bag(path: Path, topic: Optional[str] = None,
     if t.size == 0:
         why = f'joint {joint!r} is in none of its messages' if missing else 'no decodable message'
         raise InputError(f'{path}: {name}: {why}')
-    notes = []
+    notes = _bag_notes(bag)
     if bad:
         notes.append(f'{bad} undecodable message(s) on {name} dropped')
     if missing:

@@ -9,7 +9,8 @@ record, still far below deserialising). Compression: none, zstd and lz4, as rosb
 """
 import mmap
 import struct
-from typing import Iterator, Set, Tuple
+from typing import Dict, Iterator, Optional, Set, Tuple
+import zlib
 
 from gyro_char.recordings import InputError
 import numpy as np
@@ -41,11 +42,14 @@ def _decompress(kind: str, payload: bytes, size: int) -> bytes:
 class McapTopicScan:
     """Iterate blocks of one topic's payloads from an MCAP file."""
 
-    def __init__(self, path: str, topic: str) -> None:
+    def __init__(self, path: str, topic: str, tolerate_truncation: bool = False) -> None:
         self.path = path
         self.topic = topic
         self.channels = {}  # id -> topic
         self.wanted: Set[int] = set()
+        # for a file never closed (recording killed): stop at the cut instead of failing
+        self.tolerate_truncation = tolerate_truncation
+        self.truncated_at: Optional[int] = None
 
     def _channel(self, mv: memoryview, start: int) -> None:
         cid, _schema, nlen = struct.unpack_from('<HHI', mv, start)
@@ -84,6 +88,9 @@ class McapTopicScan:
             (length,) = struct.unpack_from('<Q', mm, pos + 1)
             start, end = pos + 9, pos + 9 + length
             if end > size:
+                if self.tolerate_truncation:
+                    self.truncated_at = pos
+                    break
                 raise InputError(f'{self.path}: truncated MCAP record at byte {pos} '
                                  f'(file cut short? `ros2 bag reindex` may help)')
             if op == OP_CHANNEL:
@@ -99,14 +106,16 @@ class McapTopicScan:
                 break
             pos = end
         else:
-            if pos != size:
+            if pos != size and not self.tolerate_truncation:
                 raise InputError(f'{self.path}: truncated MCAP file (no data-end record)')
+            if self.tolerate_truncation and self.truncated_at is None:
+                self.truncated_at = pos
         if loose:
             offs, sizes = zip(*loose)
             yield data, np.array(offs, dtype=np.int64), np.array(sizes, dtype=np.int64)
 
     def _chunk(self, mm, data, mv, start: int, end: int, pos: int):
-        _t0, _t1, usize, _crc, clen = struct.unpack_from('<QQQII', mm, start)
+        _t0, _t1, usize, crc, clen = struct.unpack_from('<QQQII', mm, start)
         kind = bytes(mm[start + 32:start + 32 + clen]).decode('ascii', 'replace')
         (rlen,) = struct.unpack_from('<Q', mm, start + 32 + clen)
         r0 = start + 40 + clen
@@ -119,6 +128,9 @@ class McapTopicScan:
             if rlen != usize:
                 raise InputError(f'{self.path}: corrupt MCAP chunk at byte {pos}')
             inner, base = data, r0
+        # a zero CRC means 'not computed' (rosbags writes none; ros2 bag record does)
+        if crc and zlib.crc32(inner[base:base + usize]) != crc:
+            raise InputError(f'{self.path}: corrupt MCAP chunk at byte {pos} (CRC mismatch)')
         return self._records(inner, base, base + usize, pos)
 
     def _records(self, buf: np.ndarray, lo: int, hi: int, pos: int):
@@ -157,3 +169,51 @@ class McapTopicScan:
         if not offs:
             return None
         return buf, np.array(offs, dtype=np.int64), np.array(sizes, dtype=np.int64)
+
+
+def list_channels(path: str) -> Dict[str, str]:
+    """
+    Topic -> message type of an MCAP file that rosbags cannot open (no summary: cut short).
+
+    Reads from the start until the first message: channels announced later are not seen.
+    """
+    found: Dict[str, str] = {}
+    schemas: Dict[int, str] = {}
+    with open(path, 'rb') as fh:
+        data = fh.read(64 << 20)  # the first records; a recording announces its channels early
+    if data[:8] != MAGIC:
+        return found
+
+    def walk(buf: bytes, pos: int, end: int) -> bool:
+        while pos + 9 <= end:
+            op = buf[pos]
+            (length,) = struct.unpack_from('<Q', buf, pos + 1)
+            s, e = pos + 9, pos + 9 + length
+            if e > end:
+                return True
+            if op == 0x03:
+                sid, nlen = struct.unpack_from('<HI', buf, s)
+                schemas[sid] = buf[s + 6:s + 6 + nlen].decode('utf-8', 'replace')
+            elif op == OP_CHANNEL:
+                _cid, sid, nlen = struct.unpack_from('<HHI', buf, s)
+                topic = buf[s + 8:s + 8 + nlen].decode('utf-8', 'replace')
+                found[topic] = schemas.get(sid, '?')
+            elif op == OP_MESSAGE:
+                return True
+            elif op == OP_CHUNK:
+                _t0, _t1, usize, _crc, clen = struct.unpack_from('<QQQII', buf, s)
+                kind = buf[s + 32:s + 32 + clen].decode('ascii', 'replace')
+                (rlen,) = struct.unpack_from('<Q', buf, s + 32 + clen)
+                r0 = s + 40 + clen
+                inner = buf[r0:r0 + rlen] if not kind else _decompress(kind, buf[r0:r0 + rlen],
+                                                                       usize)
+                if walk(inner, 0, len(inner)):
+                    return True
+            pos = e
+        return True
+
+    try:
+        walk(data, 8, len(data))
+    except (struct.error, InputError, ValueError, RuntimeError, OSError):
+        pass
+    return found
