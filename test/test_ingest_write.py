@@ -98,3 +98,8 @@ def test_write_refuses_bad_requests(tmp_path):
     (tmp_path / 'exists').mkdir()
     with pytest.raises(InputError, match='exists already'):
         write_bag(str(tmp_path / 'exists'), imu)
+    imu.t[3] = np.nan
+    with pytest.raises(InputError, match='stamps must be finite'):
+        write_bag(str(tmp_path / 'nan'), imu)
+    with pytest.raises(InputError, match='no encoder samples'):
+        write_bag(str(tmp_path / 'e'), _imu(10), Recording(np.empty(0), {'encoder': []}))

@@ -163,8 +163,12 @@ def write_bag(path: str, imu: Recording, encoder: Optional[Recording] = None, *,
         raise InputError(f'{path} exists already; not overwriting')
     if len(imu) == 0:
         raise InputError('no IMU samples to write')
-    if encoder is not None and ENCODER_CHANNEL not in encoder.channels:
-        raise InputError('encoder recording has no encoder channel')
+    if encoder is not None and (ENCODER_CHANNEL not in encoder.channels or len(encoder) == 0):
+        raise InputError('encoder recording has no encoder samples')
+    for rec, what in ((imu, 'IMU'), (encoder, 'encoder')):
+        if rec is not None and not (np.all(np.isfinite(rec.t)) and np.all(np.abs(rec.t) < 2**31)):
+            raise InputError(f'{what} stamps must be finite seconds within the int32 range of '
+                             f'builtin_interfaces/Time')
     store = typestore()
     gyro, accel, _ = _imu_channels(imu)
     imu_ns = stamps_ns(imu.t)
