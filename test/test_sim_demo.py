@@ -46,3 +46,19 @@ def test_demo_live_nodes_over_loopback(tmp_path, capsys, monkeypatch):
     # Same seed, same data: the live filter agrees with the offline one closely.
     assert float(cells[8]) == pytest.approx(float(cells[3]), abs=0.5 * float(cells[4]))
     assert os.path.getsize(out / 'demo.log') > 0
+
+
+def test_allan_vs_truth_plot(tmp_path):
+    allantools = pytest.importorskip('allantools')
+    from gyro_char.bench_sim import simulate_static
+    from gyro_char.report.sim import plot_allan_vs_truth
+    run = simulate_static('adis16405', duration=300.0, seed=1, channels=['gyro_x', 'gyro_y'])
+    channels = {}
+    for name in ('gyro_x', 'gyro_y'):
+        tau, adev, err, _ = allantools.oadev(run.imu.channels[name], rate=1000 / 3,
+                                             data_type='freq', taus='octave')
+        channels[name] = {'tau_s': list(tau), 'adev': list(adev), 'adev_lo': list(adev - err),
+                          'adev_hi': list(adev + err), 'unit': 'rad/s'}
+    path = tmp_path / 'a.png'
+    plot_allan_vs_truth({'channels': channels}, run.truth, str(path))
+    assert path.stat().st_size > 10_000

@@ -122,6 +122,10 @@ def run(args) -> int:
             _command(['allan', static_bag, '--out', str(out / 'static')]
                      + (['--quiet'] if args.quiet else []), log)
             noise = json.loads((out / 'static' / 'noise.json').read_text())
+            from gyro_char.report.sim import plot_allan_vs_truth
+            allan = json.loads((out / 'static' / 'allan.json').read_text())
+            plot_allan_vs_truth(allan, static.truth, str(out / 'static' / 'allan_truth.png'),
+                                noise)
         else:
             missing.append('gyro-char allan (not in this build): Table 2 shows truth only')
         live = None
