@@ -157,14 +157,26 @@ class SwingEstimates:
         return out
 
 
-def _diff(a: Estimate, b: Estimate) -> Estimate:
-    return Estimate(a.value - b.value, float(np.hypot(a.sigma, b.sigma)), a.unit)
+def _own(gyro: Estimate, enc: Estimate, rho: Estimate) -> Estimate:
+    """
+    Return the gyro's own rate error: gyro - (1 + rho) * encoder.
+
+    The gyro senses the stand's own axis drift through its scale factor, so the paper's plain
+    difference (2)/(3) keeps rho times the stand's drift (e.g. 1.85 % of 2e-6 rad/s for a FOG,
+    a third of its 15-min bias sigma); scaling the encoder term by (1 + rho) removes it.
+    """
+    k = 1.0 + rho.value
+    var = gyro.sigma ** 2 + (k * enc.sigma) ** 2 + (enc.value * rho.sigma) ** 2
+    return Estimate(gyro.value - k * enc.value, float(np.sqrt(var)), gyro.unit)
 
 
 def combine(enc: FilterResult, gyro: FilterResult, period_s: float,
             notes: Optional[List[str]] = None, gyro_gain: float = 1.0) -> SwingEstimates:
     """
     Estimates (1)-(3) from the two filters (independent sensors: variances add).
+
+    Bias and drift are (2) and (3) with the stand's drift as the gyro sees it removed: the
+    gyro term minus (1 + rho) times the encoder term (``_own``).
 
     ``gyro_gain`` is the integration rule's gain at the swing period (``swing_align.
     trapezoid_gain``); the gyro amplitude is divided by it.
@@ -177,13 +189,13 @@ def combine(enc: FilterResult, gyro: FilterResult, period_s: float,
     rho = a_g.value / a_e.value - 1.0 if a_e.value > 0 else float('nan')
     rho_sigma = float(np.hypot(a_g.sigma / a_e.value, a_g.value * a_e.sigma / a_e.value ** 2)) \
         if a_e.value > 0 else float('nan')
-    bias = _diff(gyro.w0(), enc.w0())
+    sfe = Estimate(float(rho), rho_sigma, '1')
+    bias = _own(gyro.w0(), enc.w0(), sfe)
     converged = bool(a_e.value > 0 and a_g.value > 0
                      and a_e.sigma < 0.01 * a_e.value and a_g.sigma < 0.01 * a_g.value
                      and bias.sigma < 2 * np.pi / period_s * a_e.value)
     return SwingEstimates(
-        scale_factor_error=Estimate(float(rho), rho_sigma, '1'),
-        bias=bias, bias_drift=_diff(gyro.wdot0(), enc.wdot0()),
+        scale_factor_error=sfe, bias=bias, bias_drift=_own(gyro.wdot0(), enc.wdot0(), sfe),
         amplitude_encoder=a_e, amplitude_gyro=a_g, period_s=float(period_s),
         samples_encoder=enc.samples, samples_gyro=gyro.samples, converged=converged,
         noise_encoder_rad=enc.noise, noise_gyro_arw=gyro.noise, notes=list(notes or []))
