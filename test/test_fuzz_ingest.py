@@ -183,3 +183,45 @@ def test_fuzz_scalar_blocks_match_rosbags():
             assert np.array([got[0][k], got[1][k]]).view(np.int64).tolist() == \
                 np.array(ref).view(np.int64).tolist()
     assert accepted > 100
+
+
+def test_fuzz_ros1_payloads_match_rosbags():
+    from bag_factory import STORE1
+    from gyro_char.ingest.ros1_imu import decode_imu_ros1
+    rec = imu_recording(30, seed=6)
+    rng = np.random.default_rng(6)
+    seeds = []
+    for i, t in enumerate(rec.t):
+        msg = imu_msg(STORE1, t, [float(rec.channels[k][i]) for k in IMU_CHANNELS],
+                      frame_id='f' * int(rng.integers(0, 10)), ros1=True)
+        seeds.append(bytes(STORE1.serialize_ros1(msg, 'sensor_msgs/msg/Imu')))
+    payloads = []
+    for _ in range(3000):
+        d = bytearray(seeds[int(rng.integers(0, len(seeds)))])
+        for _ in range(int(rng.integers(1, 3))):
+            where = rng.integers(0, 4)
+            if where == 0 and len(d) >= 16:  # seq, stamp, frame_id length
+                d[int(rng.integers(0, 16))] = int(rng.integers(0, 256))
+            elif where == 1:
+                d = d[:int(rng.integers(0, len(d) + 1))]
+            elif where == 2:
+                d += bytes(int(rng.integers(1, 9)))
+            elif len(d):
+                d[int(rng.integers(0, len(d)))] = int(rng.integers(0, 256))
+        payloads.append(bytes(d))
+    sizes = np.array([len(p) for p in payloads], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    t, values, ok = decode_imu_ros1(np.frombuffer(b''.join(payloads), np.uint8), offsets, sizes)
+    accepted = 0
+    for i, raw in enumerate(payloads):
+        try:
+            stamp, six = imu_sample(STORE1.deserialize_ros1(raw, 'sensor_msgs/msg/Imu'))
+        except Exception:  # noqa: B902 - rosbags refusing it is a valid outcome
+            assert not ok[i], f'case {i}: fast path accepted what rosbags refuses'
+            continue
+        if ok[i]:
+            accepted += 1
+            got = np.array([t[i]] + [values[k][i] for k in IMU_CHANNELS])
+            assert np.array_equal(got.view(np.int64),
+                                  np.array([stamp] + list(six)).view(np.int64)), f'case {i}'
+    assert accepted > 500

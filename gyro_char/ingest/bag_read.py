@@ -15,6 +15,7 @@ from gyro_char.ingest.bag_write import typestore
 from gyro_char.ingest.cdr import decode_imu
 from gyro_char.ingest.cdr_scalar import decode_scalar
 from gyro_char.ingest.mcap_scan import list_channels, McapTopicScan
+from gyro_char.ingest.ros1_imu import decode_imu_ros1
 from gyro_char.progress import progress
 from gyro_char.recordings import ENCODER_CHANNEL, IMU_CHANNELS, InputError, Recording
 from msg_adapters import imu_sample, joint_angle, vector3_x
@@ -178,11 +179,7 @@ def _sqlite_blocks(files: List[Path], topic: str) -> Iterator[Tuple]:
                 rows = cur.fetchmany(SQL_BATCH)
                 if not rows:
                     break
-                payloads = [r[0] for r in rows]
-                sizes = np.fromiter(map(len, payloads), dtype=np.int64, count=len(payloads))
-                offsets = np.zeros(sizes.size, dtype=np.int64)
-                np.cumsum(sizes[:-1], out=offsets[1:])
-                yield np.frombuffer(b''.join(payloads), np.uint8), offsets, sizes
+                yield _joined([r[0] for r in rows])
         finally:
             con.close()
 
@@ -205,19 +202,42 @@ def _bag_notes(bag: Bag) -> List[str]:
     return notes
 
 
+def _ros1_blocks(bag: Bag, topic: str) -> Iterator[Tuple]:
+    """Raw ROS 1 payloads via rosbags (no deserialisation), joined in blocks."""
+    payloads = []
+    for _, _, raw in bag.reader.messages(connections=bag.connections(topic)):
+        payloads.append(raw)
+        if len(payloads) == SQL_BATCH:
+            yield _joined(payloads)
+            payloads = []
+    if payloads:
+        yield _joined(payloads)
+
+
+def _joined(payloads: List[bytes]) -> Tuple:
+    sizes = np.fromiter(map(len, payloads), dtype=np.int64, count=len(payloads))
+    offsets = np.zeros(sizes.size, dtype=np.int64)
+    np.cumsum(sizes[:-1], out=offsets[1:])
+    return np.frombuffer(b''.join(payloads), np.uint8), offsets, sizes
+
+
 def _fast_imu(bag: Bag, topic: str, quiet: bool) -> Recording:
-    blocks = _payload_blocks(bag, topic)
+    ros1 = bag.path.suffix == '.bag'
+    blocks = _ros1_blocks(bag, topic) if ros1 else _payload_blocks(bag, topic)
+    decode = decode_imu_ros1 if ros1 else decode_imu
     store = typestore()
     total = bag.total(topic)
     # decode straight into preallocated outputs: fresh memory is the costly part at this size
     out = _Columns(total or 1 << 16)
     with progress(total=total, desc=f'reading {topic}', quiet=quiet, unit='msg') as bar:
         for buf, offsets, sizes in blocks:
-            t, values, ok = decode_imu(buf, offsets, sizes)
+            t, values, ok = decode(buf, offsets, sizes)
             for i in np.flatnonzero(~ok):  # payloads the vectorised decoder declined
                 raw = buf[offsets[i]:offsets[i] + sizes[i]].tobytes()
                 try:
-                    stamp, six = imu_sample(store.deserialize_cdr(raw, IMU_TYPE))
+                    msg = (bag.reader.deserialize(raw, IMU_TYPE) if ros1
+                           else store.deserialize_cdr(raw, IMU_TYPE))
+                    stamp, six = imu_sample(msg)
                 except Exception:  # noqa: B902 - any undecodable payload is counted, not fatal
                     continue
                 ok[i] = True
@@ -297,7 +317,7 @@ def read_imu_bag(path: Path, topic: Optional[str] = None, quiet: bool = False,
     with Bag(path) as bag:
         name = bag.pick(topic, (IMU_TYPE,), 'sensor_msgs/Imu')
         try:
-            if fast and bag.storage() in ('sqlite3', 'mcap'):
+            if fast and (bag.storage() in ('sqlite3', 'mcap') or bag.path.suffix == '.bag'):
                 return _fast_imu(bag, name, quiet)
             return _slow_imu(bag, name, quiet)
         except InputError:

@@ -1,0 +1,43 @@
+"""
+Vectorised decoding of ROS 1 serialised ``sensor_msgs/Imu`` (little-endian, no alignment).
+
+Layout: ``header.seq`` uint32 @0, ``stamp.secs`` @4 (read as int32, as rosbags does), ``nsecs`` @8,
+``frame_id`` uint32 length L @12 and its bytes @16 (no terminator), then 37 packed float64
+(orientation, covariances, angular_velocity @16+L+104, linear_acceleration @16+L+200); size
+16 + L + 296. Payloads that do not fit exactly, or whose frame_id is not ASCII, are left to
+rosbags' per-message path so both paths accept the same messages.
+"""
+from typing import Dict, Tuple
+
+from gyro_char.ingest.cdr import _ascii_frames, _gather, IMU_TAIL
+import numpy as np
+
+
+def decode_imu_ros1(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray
+                    ) -> Tuple[np.ndarray, Dict[str, np.ndarray], np.ndarray]:
+    """Return ``(t, channels, ok)`` as ``cdr.decode_imu`` does, for ROS 1 payloads."""
+    offsets = np.asarray(offsets, dtype=np.int64)
+    sizes = np.asarray(sizes, dtype=np.int64)
+    n = offsets.size
+    ok = (sizes >= 16 + IMU_TAIL) & (offsets >= 0) & (offsets + sizes <= buf.size)
+    idx = np.flatnonzero(ok)
+    off = offsets[idx]
+    little = np.zeros(idx.size, dtype=bool)
+    strlen = _gather(buf, off + 12, 'u4', little).astype(np.int64)
+    good = sizes[idx] == 16 + strlen + IMU_TAIL
+    good &= _ascii_frames(buf, off + 16, np.where(good, strlen, 0))
+    idx, off, strlen, little = idx[good], off[good], strlen[good], little[good]
+    ok[:] = False
+    ok[idx] = True
+    t = np.full(n, np.nan)
+    sec = _gather(buf, off + 4, 'i4', little).astype(np.float64)  # as rosbags reads it
+    nsec = _gather(buf, off + 8, 'u4', little).astype(np.float64)
+    t[idx] = sec + nsec * 1e-9
+    channels = {}
+    body = off + 16 + strlen
+    for base, start in (('gyro', 104), ('accel', 200)):
+        for k, axis in enumerate('xyz'):
+            values = np.full(n, np.nan)
+            values[idx] = _gather(buf, body + start + 8 * k, 'f8', little)
+            channels[f'{base}_{axis}'] = values
+    return t, channels, ok
