@@ -6,7 +6,7 @@ SI units (``gyro_x`` rad/s, ``accel_x`` m/s^2, ``encoder`` rad). A swing run is 
 (IMU and encoder) because the two streams have their own stamps; the core aligns them.
 """
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Union
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -90,3 +90,9 @@ def write_bag(path: str, imu: Recording, encoder: Optional[Recording] = None, *,
     _write_bag(path, imu, encoder, storage=storage, imu_topic=imu_topic,
                encoder_topic=encoder_topic, joint_name=joint_name, frame_id=frame_id,
                quiet=quiet)
+
+
+def segments(rec: Recording, max_gap_factor: float = 5.0) -> List[Tuple[int, int]]:
+    """Return the contiguous runs of ``rec`` as ``[(start, stop), ...]`` index slices."""
+    from gyro_char.ingest.sanitize import segments as _segments
+    return _segments(rec, max_gap_factor)
