@@ -62,12 +62,14 @@ def test_fast_path_general_layouts_bit_for_bit(tmp_path, storage):
         read_encoder(path, joint='nope')
 
 
-def test_bare_mcap_and_ros1_bag(tmp_path):
+def test_bare_mcap_db3_and_ros1_bag(tmp_path):
     rec = imu_recording(800, seed=5)
     write_bag(str(tmp_path / 'b'), rec)
     bare = tmp_path / 'copy.mcap'
     shutil.copy(tmp_path / 'b' / 'b.mcap', bare)
     _same(read_imu(str(bare)), read_imu(str(tmp_path / 'b')))
+    write_bag(str(tmp_path / 's'), rec, storage='sqlite3')
+    _same(read_imu(str(tmp_path / 's' / 's.db3')), read_imu(str(tmp_path / 'b')))
     ros1 = write_ros1(tmp_path / 'r.bag', rec)
     got = read_imu(ros1, quiet=True)
     assert np.array_equal(got.t, _expected_t(rec))
