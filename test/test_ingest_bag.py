@@ -4,7 +4,8 @@ import shutil
 
 from bag_factory import (imu_msg, imu_recording, joint_msg, STORE2, vector3_msg, write_ros1,
                          write_ros2)
-from gyro_char.ingest.bag_read import read_encoder_bag, read_imu_bag
+from gyro_char.ingest.bag_read import read_imu_bag
+from gyro_char.ingest.encoder_read import read_encoder_bag
 from gyro_char.recordings import (IMU_CHANNELS, InputError, read_encoder, read_imu, Recording,
                                   write_bag)
 import numpy as np

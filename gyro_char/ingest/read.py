@@ -46,6 +46,6 @@ def read_encoder(path: str, topic: Optional[str] = None,
         rec = Recording(rec.t, {ENCODER_CHANNEL: rec.channels[ENCODER_CHANNEL]},
                         source=rec.source, notes=rec.notes)
     else:
-        from gyro_char.ingest.bag_read import read_encoder_bag
+        from gyro_char.ingest.encoder_read import read_encoder_bag
         rec = read_encoder_bag(p, topic=topic, joint=joint, quiet=quiet)
     return sanitize(rec)
