@@ -33,10 +33,10 @@ G0 = 9.80665
 # (factor, unit): human value = SI value / factor.
 HUMAN_UNITS = {
     'gyro': {'N': (DEG / 60.0, 'deg/h^0.5'), 'B': (DEG / 3600.0, 'deg/h'),
-             'K': (DEG / 3600.0 / 60.0, 'deg/h^1.5'), 'Q': (DEG / 3600.0, 'deg (arcsec: x3600)'),
+             'K': (DEG / 3600.0 / 60.0, 'deg/h^1.5'), 'Q': (DEG / 3600.0, 'arcsec'),
              'R': (DEG / 3600.0 ** 2, 'deg/h^2')},
     'accel': {'N': (1.0 / 60.0, 'm/s/h^0.5'), 'B': (G0 * 1e-6, 'ug'),
-              'K': (G0 * 1e-6 / np.sqrt(3600.0), 'ug/s^0.5'), 'Q': (1.0, 'm/s'),
+              'K': (G0 * 1e-6 / 60.0, 'ug/h^0.5'), 'Q': (1.0, 'm/s'),
               'R': (G0 * 1e-6, 'ug/s')},
 }
 

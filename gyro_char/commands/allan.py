@@ -1,0 +1,111 @@
+"""
+``gyro-char allan INPUT``: Allan variance and IEEE 952 noise terms of a static record.
+
+Writes in ``--out`` (DESIGN.md section 4): ``allan.json`` (tau, overlapping ADEV and its 68 %
+interval per channel), ``noise.json`` (N, B, K, Q, R per channel, SI, with 68 % intervals and
+``resolved``), ``imu.yaml`` (Kalibr noise model: worst axis, per-axis values too) and
+``allan.png``. Prints the human table (deg/sqrt(h), deg/h, ...) and every note about the input.
+"""
+import json
+import os
+import sys
+
+from gyro_char.cli import add_common
+from gyro_char.recordings import InputError, read_imu
+
+DEFAULT_TOPIC = '/imu/data_raw'
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        'allan', help='Allan variance + IEEE 952 noise terms (N, B, K, Q, R) of a static record',
+        description=__doc__.strip().splitlines()[0])
+    p.add_argument('input', metavar='INPUT', help='bag directory, .mcap, ROS 1 .bag or CSV')
+    p.add_argument('--topic', default=None, help='sensor_msgs/Imu topic (bags)')
+    p.add_argument('--channels', default=None,
+                   help='comma-separated, e.g. gyro_x,gyro_y (default: all IMU channels)')
+    p.add_argument('--fit', choices=('l1', 'weighted', 'l1-raw'), default='l1',
+                   help="'l1': the paper's log-domain L1 objective (median-bias corrected), "
+                        "'weighted': EDF-weighted log least squares, 'l1-raw': uncorrected")
+    p.add_argument('--tau-min', type=float, default=None, metavar='S',
+                   help='fit only tau >= S (e.g. to skip a sensor filter at short tau)')
+    p.add_argument('--m-max', type=int, default=None,
+                   help='largest averaging factor (default: half the record)')
+    p.add_argument('--noise-id', choices=('acf', 'fit'), default='acf',
+                   help='noise type for the EDF of the intervals: lag-1 autocorrelation, or '
+                        'the dominant term of the fit')
+    p.add_argument('--boot', type=int, default=100, help='bootstrap curves for the intervals')
+    p.add_argument('--seed', type=int, default=0, help='bootstrap seed')
+    add_common(p, default_out='allan_out')
+    p.set_defaults(func=run)
+
+
+def allan_json(res) -> dict:
+    """Return allan.json (DESIGN.md section 4) of an ``AllanResult`` with intervals."""
+    from gyro_char.noise_model import RATE_UNITS, sensor_kind
+    out = {}
+    for c, name in enumerate(res.channels):
+        out[name] = {'tau_s': res.tau.tolist(), 'adev': res.adev[:, c].tolist(),
+                     'adev_lo': res.adev_lo[:, c].tolist(),
+                     'adev_hi': res.adev_hi[:, c].tolist(),
+                     'unit': RATE_UNITS[sensor_kind(name)]}
+    return {'channels': out}
+
+
+def kalibr_yaml(fits, rate_hz: float, topic: str) -> str:
+    """Return Kalibr's imu.yaml text (worst axis in the standard keys, per-axis extras)."""
+    lines = ['# IMU noise model from gyro-char allan (IEEE 952 fit of the Allan variance).',
+             '# Continuous time: *_noise_density = N (white noise), *_random_walk = K (bias',
+             '# random walk). Standard keys hold the worst axis; the *_xyz lists are per axis.',
+             f'rostopic: {topic}', f'update_rate: {rate_hz:.6g}']
+    for kind, prefix, units in (('accel', 'accelerometer', ('m/s^2/sqrt(Hz)', 'm/s^3/sqrt(Hz)')),
+                                ('gyro', 'gyroscope', ('rad/s/sqrt(Hz)', 'rad/s^2/sqrt(Hz)'))):
+        names = [n for n in fits if fits[n].kind == kind]
+        if not names:
+            continue
+        for term, key, unit in (('N', 'noise_density', units[0]), ('K', 'random_walk', units[1])):
+            values = [fits[n].terms[term].value for n in names]
+            bound = [n for n in names if not fits[n].terms[term].resolved]
+            note = f'  # [{unit}]' + (f'; upper bound for {",".join(bound)}' if bound else '')
+            lines.append(f'{prefix}_{key}: {max(values):.6e}{note}')
+            lines.append(f'{prefix}_{key}_xyz: [' + ', '.join(f'{v:.6e}' for v in values)
+                         + f']  # {",".join(names)}')
+    return '\n'.join(lines) + '\n'
+
+
+def run(args) -> int:
+    from gyro_char.allan_edf import add_confidence, alpha_from_model
+    from gyro_char.allan_input import compute
+    from gyro_char.noise_fit import fit_result
+    from gyro_char.report.allan import plot_allan, table
+    import numpy as np
+
+    rec = read_imu(args.input, topic=args.topic, quiet=args.quiet)
+    channels = None
+    if args.channels:
+        channels = [c.strip() for c in args.channels.split(',') if c.strip()]
+    res = compute(rec, channels=channels, m_max=args.m_max)
+    try:
+        fits = fit_result(res, method=args.fit, tau_min=args.tau_min, n_boot=args.boot,
+                          seed=args.seed)
+    except ValueError as exc:
+        raise InputError(f'cannot fit the noise model: {exc}') from None
+    if args.noise_id == 'fit':
+        alpha = np.stack([alpha_from_model(res.tau, fits[n].coeffs()) for n in res.channels],
+                         axis=1)
+        add_confidence(res, alpha)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, 'allan.json'), 'w') as fh:
+        json.dump(allan_json(res), fh)
+    with open(os.path.join(args.out, 'noise.json'), 'w') as fh:
+        json.dump({'channels': {n: f.to_json() for n, f in fits.items()}}, fh, indent=2)
+    with open(os.path.join(args.out, 'imu.yaml'), 'w') as fh:
+        fh.write(kalibr_yaml(fits, 1.0 / res.dt, args.topic or DEFAULT_TOPIC))
+    plot_allan(res, fits, os.path.join(args.out, 'allan.png'),
+               title=f'{os.path.basename(str(args.input))}: {res.n_samples} samples at '
+                     f'{1.0 / res.dt:.6g} Hz, fit {args.fit}')
+    for note in res.notes:
+        print(f'note: {note}', file=sys.stderr)
+    print('\n'.join(table(fits)))
+    print(f'wrote {args.out}/allan.json, noise.json, imu.yaml, allan.png')
+    return 0
