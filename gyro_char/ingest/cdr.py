@@ -181,13 +181,19 @@ def _decode_uniform(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray):
         return None  # non-ASCII frame_id: let rosbags judge its UTF-8
     if np.any(rows[:, 15 + strlen] != 0):
         return None  # a missing string terminator, which rosbags refuses
-    sec = np.ascontiguousarray(rows[:, 4:8]).view(order + 'i4')[:, 0].astype(np.float64)
-    nsec = np.ascontiguousarray(rows[:, 8:12]).view(order + 'u4')[:, 0].astype(np.float64)
-    t = sec + nsec * 1e-9
     body = 4 + a
+    # one strided record view; the fields are read straight from the buffer (no copies until the
+    # caller stores them), so the channels returned are read-only views of ``buf``
+    fields = np.dtype({'names': ['sec', 'nsec', 'gyro', 'accel'],
+                       'formats': [order + 'i4', order + 'u4', (order + 'f8', 3),
+                                   (order + 'f8', 3)],
+                       'offsets': [4, 8, body + 104, body + 200], 'itemsize': size})
+    recs = np.ndarray(shape=(n,), dtype=fields, buffer=buf, offset=first, strides=(stride,))
+    t = recs['sec'].astype(np.float64)
+    t += recs['nsec'].astype(np.float64) * 1e-9
     channels = {}
-    for base, start in (('gyro', 104), ('accel', 200)):
-        block = np.ascontiguousarray(rows[:, body + start:body + start + 24]).view(order + 'f8')
+    for base in ('gyro', 'accel'):
+        block = recs[base]
         for k, axis in enumerate('xyz'):
-            channels[f'{base}_{axis}'] = block[:, k].astype(np.float64)
+            channels[f'{base}_{axis}'] = block[:, k]
     return t, channels, np.ones(n, dtype=bool)
