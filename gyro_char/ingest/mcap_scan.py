@@ -20,6 +20,9 @@ OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_FOOTER, OP_DATA_END = 0x04, 0x05, 0x06, 0x0
 MESSAGE_HEAD = 22  # channel id 2 + sequence 4 + log time 8 + publish time 8
 
 Block = Tuple[np.ndarray, np.ndarray, np.ndarray]  # (uint8 buffer, offsets, sizes)
+# the start of a message record: opcode, record length, channel id
+_HEAD = np.dtype({'names': ['op', 'len', 'cid'], 'formats': ['u1', '<u8', '<u2'],
+                  'offsets': [0, 1, 9], 'itemsize': 11})
 
 
 def _decompress(kind: str, payload: bytes, size: int) -> bytes:
@@ -139,11 +142,13 @@ class McapTopicScan:
             length = int(buf[lo + 1:lo + 9].view('<u8')[0])
             rec = 9 + length
             if length >= MESSAGE_HEAD and n_bytes % rec == 0:
-                rows = np.lib.stride_tricks.as_strided(buf[lo:], shape=(n_bytes // rec, rec),
-                                                       strides=(rec, 1), writeable=False)
-                if np.all(rows[:, 0] == OP_MESSAGE) and np.all(rows[:, 1:9] == rows[0, 1:9]):
-                    cids = np.ascontiguousarray(rows[:, 9:11]).view('<u2')[:, 0]
-                    hit = np.flatnonzero(np.isin(cids, list(self.wanted)))
+                heads = np.ndarray(shape=(n_bytes // rec,), dtype=_HEAD, buffer=buf, offset=lo,
+                                   strides=(rec,))
+                if np.all(heads['op'] == OP_MESSAGE) and np.all(heads['len'] == length):
+                    cids = heads['cid']
+                    hit = (np.flatnonzero(cids == next(iter(self.wanted)))
+                           if len(self.wanted) == 1 else
+                           np.flatnonzero(np.isin(cids, list(self.wanted))))
                     if hit.size == 0:
                         return None
                     offsets = lo + hit.astype(np.int64) * rec + 9 + MESSAGE_HEAD
