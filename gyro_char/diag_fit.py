@@ -68,13 +68,20 @@ class GapObjective:
         self.simulate = simulate
         self.seeds = list(seeds)
         self.calls = 0
+        # Scatter of the baseline's twins per record (diag_gap's deviance reference); None
+        # until the baseline is known, and the baseline's own gap is then the plain rms z.
+        self.reference: Optional[List[Obs]] = None
 
     def evaluate(self, effects: Effects) -> Evaluation:
         self.calls += 1
         stats = [diag_gap.sim_stats([self.simulate(i, effects, s) for s in self.seeds])
                  for i in range(len(self.reals))]
-        return Evaluation(effects=list(effects), gap=diag_gap.multi_gap(self.reals, stats),
+        return Evaluation(effects=list(effects),
+                          gap=diag_gap.multi_gap(self.reals, stats, self.reference),
                           stats=stats)
+
+    def set_reference(self, baseline: Evaluation) -> None:
+        self.reference = [s.std for s in baseline.stats]
 
 
 def _to_u(p: Param, v: float) -> float:

@@ -1,19 +1,25 @@
 """
 The sim-to-real gap, in units of the simulation's own scatter.
 
-Repeated simulations of a model give, for every observable element j, a mean m_j and a scatter
-s_j. The real record's element r_j is scored z_j = (r_j - m_j) / s_j. A block's score is the mean
-of z² over its elements; the gap (``GAP_METRIC``) is the square root of the mean block score, so
-every block weighs the same whatever its length. A record drawn from the model itself scores
-about 1; the exact null distribution is measured by scoring each repeat against the others
-(leave-one-out), which is what "beyond the sim's own scatter" is judged against.
+Repeated simulations of the baseline model give, for every observable element j, a scatter s0_j;
+repeated simulations of any candidate model give a mean m_j. The real record's element r_j is
+scored z_j = (r_j - m_j) / s0_j. A block's score is the mean of z² over its elements; the gap
+(``GAP_METRIC``) is the square root of the mean block score, so every block weighs the same
+whatever its length.
+
+The yardstick s0 is the baseline's scatter for every model on purpose: were each model judged
+by its own scatter, an effect could "explain" a gap by making the twins noisier rather than by
+bringing their mean to the real record. A model that genuinely adds variance (flicker, a random
+walk) then leaves a residual gap even when right; that is why the null distribution - each
+repeat of the model scored against the other repeats with the same yardstick (leave-one-out) -
+is recomputed for every model, and "within the sim's own scatter" is judged against it.
 """
 from dataclasses import dataclass
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-GAP_METRIC = 'rms_z_blockwise'
+GAP_METRIC = 'rms_z_in_baseline_scatter'
 # Scatter floors per block (in the block's own units): a sim that is deterministic in some
 # element must not turn a rounding difference into an infinite z.
 SCATTER_FLOOR = {'adev': 0.002, 'psd': 0.002, 'tone': 0.01, 'acf': 0.001, 'drift': 1e-9}
@@ -40,23 +46,23 @@ def sim_stats(repeats: Sequence[Obs]) -> SimStats:
     return SimStats(mean=mean, std=std, repeats=list(repeats))
 
 
-def zscores(real: Obs, stats: SimStats) -> Obs:
-    return {b: (real[b] - stats.mean[b]) / stats.std[b] for b in stats.mean}
+def zscores(real: Obs, stats: SimStats, ref: Optional[Obs] = None) -> Obs:
+    """Scores of ``real`` against the twins' mean, in ``ref`` scatter (default: their own)."""
+    scale = stats.std if ref is None else ref
+    return {b: (real[b] - stats.mean[b]) / scale[b] for b in stats.mean}
 
 
-def gap_of_z(z: Obs) -> float:
-    return float(np.sqrt(np.mean([np.mean(v * v) for v in z.values()])))
+def gap(real: Obs, stats: SimStats, ref: Optional[Obs] = None) -> float:
+    return multi_gap([real], [stats], None if ref is None else [ref])
 
 
-def gap(real: Obs, stats: SimStats) -> float:
-    return gap_of_z(zscores(real, stats))
-
-
-def multi_gap(reals: Sequence[Obs], stats: Sequence[SimStats]) -> float:
+def multi_gap(reals: Sequence[Obs], stats: Sequence[SimStats],
+              refs: Optional[Sequence[Obs]] = None) -> float:
     """Gap over several records (each with its own simulated repeats), blocks pooled."""
     scores = []
-    for r, s in zip(reals, stats):
-        scores.extend(np.mean(v * v) for v in zscores(r, s).values())
+    for i, (r, s) in enumerate(zip(reals, stats)):
+        z = zscores(r, s, None if refs is None else refs[i])
+        scores.extend(float(np.mean(v * v)) for v in z.values())
     return float(np.sqrt(np.mean(scores)))
 
 
@@ -88,16 +94,24 @@ def locate(z: Obs, ranges: Dict[str, np.ndarray], units: Dict[str, str], *,
     return found
 
 
-def null_gaps(stats: Sequence[SimStats]) -> np.ndarray:
+def null_gaps(stats: Sequence[SimStats],
+              ref_stats: Optional[Sequence[SimStats]] = None) -> np.ndarray:
     """
     Gap of each repeat against the other repeats: the gap's distribution under the model.
 
-    With several records, repeat k of every record plays the real records together.
+    With several records, repeat k of every record plays the real records together. The
+    yardstick is the scatter of ``ref_stats`` (the baseline's twins) without repeat k, or of
+    the model's other repeats: in both cases a scatter the left-out repeat took no part in, as
+    the real record took no part in the scatter it is scored in.
     """
     k_max = min(len(s.repeats) for s in stats)
     out = []
     for k in range(k_max):
         reals = [s.repeats[k] for s in stats]
         others = [sim_stats(s.repeats[:k] + s.repeats[k + 1:]) for s in stats]
-        out.append(multi_gap(reals, others))
+        if ref_stats is None:
+            refs = [o.std for o in others]
+        else:
+            refs = [sim_stats(r.repeats[:k] + r.repeats[k + 1:]).std for r in ref_stats]
+        out.append(multi_gap(reals, others, refs))
     return np.asarray(out)

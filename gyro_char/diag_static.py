@@ -248,4 +248,5 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
                    spaces=static_spaces(base, recs[0], names),
                    ranges=[lay.ranges for lay in layouts], units=dict(obs.BLOCK_UNITS),
                    baseline=base.to_json(),
-                   nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]))
+                   nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]),
+                   context=base)

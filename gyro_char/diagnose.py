@@ -69,6 +69,8 @@ class Problem:
     # Baseline parameters re-tuned with every candidate (e.g. a scale on the white noise N),
     # so that a small error in the baseline fit is not mistaken for an effect.
     nuisance: Optional[EffectSpace] = None
+    # Kind-specific fitted baseline object (e.g. ``diag_static.StaticBaseline``).
+    context: object = None
 
 
 @dataclass
@@ -140,6 +142,7 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         nuisance = (problem.nuisance.name, nparams)
     else:
         base = objective.evaluate([])
+    objective.set_reference(base)
     null = diag_gap.null_gaps(base.stats)
     shrink_needed = 2.0 * float(np.std(null, ddof=1))
     explained = float(np.quantile(null, 0.95))
@@ -167,7 +170,7 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
     evaluations = {'baseline': base}
     for step in range(max_steps):
         if current.gap <= explained:
-            break
+            break  # within what the current model scores against itself
         if step > 0:
             fits = {}
             for space in problem.spaces:
@@ -194,14 +197,19 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         nuisance = best_nuisance
         steps.append({'effect': best, 'params': _jsonable(params), 'gap_after': ev.gap})
         current = ev
+        # The model now has its own scatter: re-derive what "within it" means.
+        null_now = diag_gap.null_gaps(ev.stats, base.stats)
+        # Never below the baseline's own spread (a 95th percentile of few repeats is noisy).
+        explained = max(explained, float(np.quantile(null_now, 0.95)))
+        shrink_needed = max(shrink_needed, 2.0 * float(np.std(null_now, ddof=1)))
     evaluations['final'] = current
     model = selected + ([nuisance] if nuisance else [])
     return Diagnosis(
         kind=problem.kind, baseline_gap=base.gap, where=where, steps=steps,
         selected_effects=[n for n, _ in selected], final_gap=current.gap, ranking=ranking,
         null_gap={'mean': float(np.mean(null)), 'std': float(np.std(null, ddof=1)),
-                  'q95': explained, 'repeats': repeats,
-                  'shrink_needed': shrink_needed},
+                  'q95': float(np.quantile(null, 0.95)), 'repeats': repeats,
+                  'final_model_q95': explained, 'shrink_needed': shrink_needed},
         ambiguous=ambiguous, baseline=problem.baseline, evaluations=evaluations,
         reals=problem.reals, model=model)
 
@@ -210,4 +218,6 @@ def evaluate_model(problem: Problem, effects: Sequence, *, repeats: int = 10,
                    seed: int = 1) -> Optional[Evaluation]:
     """Gap of a fixed model (e.g. fitted on another record) on ``problem``'s records."""
     seeds = [seed * 1000 + k for k in range(repeats)]
-    return GapObjective(problem.reals, problem.simulate, seeds).evaluate(list(effects))
+    objective = GapObjective(problem.reals, problem.simulate, seeds)
+    objective.set_reference(objective.evaluate([]))
+    return objective.evaluate(list(effects))
