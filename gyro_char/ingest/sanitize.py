@@ -29,40 +29,43 @@ def sanitize(rec: Recording, max_gap_factor: float = DEFAULT_GAP_FACTOR) -> Reco
     values = [rec.channels[k] for k in names]
     if t.size == 0:
         raise InputError(f'{src}: no samples')
-    finite = np.isfinite(t)
-    for v in values:
-        finite &= np.isfinite(v)
-    bad = int(t.size - np.count_nonzero(finite))
-    if bad:
-        notes.append(f'{bad} sample(s) with NaN/Inf stamp or value dropped')
-        t = t[finite]
-        values = [v[finite] for v in values]
+    # a finite sum proves every term finite: the per-sample mask is built only when needed
+    if not all(np.isfinite(np.sum(x)) for x in [t] + values):
+        finite = np.isfinite(t)
+        for v in values:
+            finite &= np.isfinite(v)
+        bad = int(t.size - np.count_nonzero(finite))
+        if bad:
+            notes.append(f'{bad} sample(s) with NaN/Inf stamp or value dropped')
+            t = t[finite]
+            values = [v[finite] for v in values]
     if t.size == 0:
         raise InputError(f'{src}: every sample has a NaN/Inf stamp or value')
-    backwards = int(np.count_nonzero(np.diff(t) < 0))
+    dt = np.diff(t)
+    backwards = int(np.count_nonzero(dt < 0))
     if backwards:
         order = np.argsort(t, kind='stable')
         t = t[order]
         values = [v[order] for v in values]
         notes.append(f'{backwards} out-of-order stamp(s): samples sorted by stamp')
-    if t.size > 1:
-        keep = np.empty(t.size, dtype=bool)
-        keep[0] = True
-        np.not_equal(t[1:], t[:-1], out=keep[1:])
-        dups = int(t.size - np.count_nonzero(keep))
-        if dups:
-            notes.append(f'{dups} sample(s) with a repeated stamp dropped (first kept)')
-            t = t[keep]
-            values = [v[keep] for v in values]
+        dt = np.diff(t)
+    repeated = dt == 0
+    dups = int(np.count_nonzero(repeated))
+    if dups:
+        keep = np.ones(t.size, dtype=bool)
+        keep[1:] = ~repeated
+        notes.append(f'{dups} sample(s) with a repeated stamp dropped (first kept)')
+        t = t[keep]
+        values = [v[keep] for v in values]
+        dt = np.diff(t)
     out = Recording(t, dict(zip(names, values)), source=rec.source, notes=notes)
     if t.size > 2:
-        _report_timing(out, max_gap_factor)
+        _report_timing(out, dt, max_gap_factor)
     _report_units(out)
     return out
 
 
-def _report_timing(rec: Recording, max_gap_factor: float) -> None:
-    dt = np.diff(rec.t)
+def _report_timing(rec: Recording, dt: np.ndarray, max_gap_factor: float) -> None:
     step = float(np.median(dt))
     gaps = dt > max_gap_factor * step
     n_gaps = int(np.count_nonzero(gaps))
@@ -85,8 +88,9 @@ def _report_units(rec: Recording) -> None:
     for name in GYRO_CHANNELS:
         v = rec.channels.get(name)
         # the max first: the percentile (a partition) is only needed when the max is large
-        if v is not None and v.size and float(np.max(np.abs(v))) > DEG_S_SUSPECT_RAD_S \
-                and float(np.percentile(np.abs(v), 99.9)) > DEG_S_SUSPECT_RAD_S:
+        if v is None or not v.size or max(float(v.max()), -float(v.min())) <= DEG_S_SUSPECT_RAD_S:
+            continue
+        if float(np.percentile(np.abs(v), 99.9)) > DEG_S_SUSPECT_RAD_S:
             rec.notes.append(
                 f'warning: {name} reaches {float(np.max(np.abs(v))):.4g} rad/s: looks like deg/s '
                 f'in a rad/s field (values kept as given)')
