@@ -17,7 +17,7 @@ def plot_allan_vs_truth(allan: dict, truth: dict, path: str,
     Plot each gyro channel's measured ADEV (68 % band) and the truth's closed-form curve.
 
     ``allan`` is allan.json, ``truth`` truth.json, ``noise`` (optional) noise.json whose fitted
-    model is drawn dashed; deg/h against tau in seconds.
+    model (resolved terms only) is drawn dashed; deg/h against tau in seconds.
     """
     names = [c for c in ('gyro_x', 'gyro_y', 'gyro_z') if c in allan.get('channels', {})]
     fig, axes = plt.subplots(1, max(1, len(names)), figsize=(5 * max(1, len(names)), 4),
@@ -34,9 +34,11 @@ def plot_allan_vs_truth(allan: dict, truth: dict, path: str,
                       label='truth, formula (4)')
         fit = (noise or {}).get('channels', {}).get(name)
         if fit:
-            coeffs = {t: v['value'] for t, v in fit.items() if isinstance(v, dict)}
+            # Unresolved terms are upper bounds, not estimates: only resolved ones are drawn.
+            coeffs = {t: v['value'] for t, v in fit.items()
+                      if isinstance(v, dict) and v.get('resolved', True)}
             ax.loglog(tau, np.sqrt(model_avar(tau, coeffs)) * DPH, 'C3--', lw=1.0,
-                      label='fitted')
+                      label='fitted (resolved terms)')
         ax.set_title(name)
         ax.set_xlabel('tau, s')
         ax.grid(True, which='both', alpha=0.3)
