@@ -1,0 +1,207 @@
+"""
+Blind validation of the sim-to-real diagnosis (``gyro-char diagnose --kind static``).
+
+Generates static gyro records with an effect the diagnosis is NOT told about, runs the
+diagnosis blind, and prints a confusion table, top-1 accuracy, median gap shrink and the
+false-alarm rate on clean baseline records.
+
+The effects are generated here with shapes that differ from the package catalogue's
+(``gyro_char.effects``), so that the diagnosis is not rewarded for recognising its own
+generator:
+
+- internal_lowpass: a Hann-window FIR at the output rate (catalogue: cascaded moving averages
+  at an internal rate, then decimation);
+- vibration: a tone with 20 % slow amplitude modulation and a random frequency;
+- temperature_drift: a hyperbolic warm-up A / (1 + t / tau) (catalogue: exponential);
+- bias_instability: flicker approximated by a sum of five Gauss-Markov processes with
+  log-spaced correlation times (catalogue: Kasdin-Walter fractional integration);
+- rate_random_walk: a random walk with Laplace-distributed increments held for 0.5 s;
+- gauss_markov: a second-order (two cascaded first-order) Markov process;
+- quantization: a white angle error uniform on one step, differenced into rate (catalogue: a
+  floor quantizer of the accumulated angle).
+
+The clean baseline (white rate noise of ADIS16405 level, rounded to a 0.05 °/s output step) is
+generated here too, without the bench simulator. Usage::
+
+    python bench/validate_diagnosis.py            # full table (~20-40 min on 2 busy cores)
+    python bench/validate_diagnosis.py --quick    # three cases, as in test/test_diag_validation
+"""
+import argparse
+import sys
+import time
+
+from gyro_char import diag_static, diagnose
+import numpy as np
+from scipy import signal
+
+DT = 0.01
+N_ARW = 2.4 * np.pi / 180.0 / 60.0          # 2.4 deg/sqrt(h), the ADIS16405 records' level
+LSB = 0.05 * np.pi / 180.0                  # 0.05 deg/s output step
+SIG = N_ARW / np.sqrt(DT)                   # per-sample white noise, rad/s
+
+
+def clean(n: int, rng) -> np.ndarray:
+    return SIG * rng.standard_normal(n) + 0.003
+
+
+def hann_lowpass(x, rng, length):
+    h = np.hanning(length + 2)[1:-1]
+    return signal.lfilter(h / h.sum(), [1.0], x)
+
+
+def am_tone(x, rng, amplitude, freq):
+    t = np.arange(x.size) * DT
+    env = 1.0 + 0.2 * np.sin(2 * np.pi * t / 37.0 + rng.uniform(0, 6.3))
+    return x + amplitude * env * np.sin(2 * np.pi * freq * t + rng.uniform(0, 6.3))
+
+
+def hyperbolic_warmup(x, rng, amplitude, tau):
+    t = np.arange(x.size) * DT
+    return x + amplitude / (1.0 + t / tau)
+
+
+def gm_sum_flicker(x, rng, b):
+    out = np.zeros_like(x)
+    for tc in np.geomspace(1.0, 300.0, 5):
+        a = np.exp(-DT / tc)
+        w = rng.standard_normal(x.size) * np.sqrt(1 - a * a)
+        w[0] = rng.standard_normal()
+        out += signal.lfilter([1.0], [1.0, -a], w)
+    return x + b * out / np.sqrt(5.0) * 1.5
+
+
+def laplace_rw(x, rng, k):
+    hold = int(0.5 / DT)
+    steps = rng.laplace(0.0, 1.0 / np.sqrt(2.0), x.size // hold + 1) * k * np.sqrt(hold * DT)
+    return x + np.repeat(np.cumsum(steps), hold)[:x.size]
+
+
+def gm2(x, rng, sigma, tc):
+    a = np.exp(-DT / tc)
+    y = signal.lfilter([1.0], [1.0, -a], signal.lfilter([1.0], [1.0, -a], rng.standard_normal(
+        x.size)))
+    y = y[-x.size:]
+    return x + sigma * y / np.std(y)
+
+
+def white_angle(x, rng, step):
+    e = rng.uniform(-0.5, 0.5, x.size + 1) * step
+    return x + np.diff(e) / DT
+
+
+# name -> (generator, [magnitude parameter sets, weaker first])
+SHAPES = {
+    'internal_lowpass': (hann_lowpass, [{'length': 3}, {'length': 5}]),
+    'vibration': (am_tone, [{'amplitude': 0.08 * SIG, 'freq': 13.3},
+                            {'amplitude': 0.25 * SIG, 'freq': 31.7}]),
+    'temperature_drift': (hyperbolic_warmup, [{'amplitude': 3e-3, 'tau': 20.0},
+                                              {'amplitude': 1e-2, 'tau': 30.0}]),
+    'bias_instability': (gm_sum_flicker, [{'b': 3e-4}, {'b': 1e-3}]),
+    'rate_random_walk': (laplace_rw, [{'k': 3e-5}, {'k': 1e-4}]),
+    'gauss_markov': (gm2, [{'sigma': 3e-3, 'tc': 0.5}, {'sigma': 1e-2, 'tc': 1.0}]),
+    'quantization': (white_angle, [{'step': 4 * N_ARW * np.sqrt(DT)},
+                                   {'step': 8 * N_ARW * np.sqrt(DT)}]),
+}
+PAIRS = [('vibration', 'internal_lowpass'), ('temperature_drift', 'internal_lowpass'),
+         ('vibration', 'bias_instability')]
+
+
+def make_record(effects, n, seed):
+    rng = np.random.default_rng(seed)
+    x = clean(n, rng)
+    for name, level in effects:
+        fn, levels = SHAPES[name]
+        x = fn(x, rng, **levels[level])
+    return np.round(x / LSB) * LSB
+
+
+def run_case(effects, n, seed, repeats):
+    x = make_record(effects, n, seed)
+    problem = diag_static.static_problem([x], DT, channel='gyro_x')
+    d = diagnose.run(problem, repeats=repeats, seed=seed + 17)
+    return d
+
+
+def cases(quick: bool, seeds):
+    if quick:
+        yield 'clean', [], seeds[0]
+        yield 'vibration', [('vibration', 1)], seeds[0]
+        yield 'internal_lowpass', [('internal_lowpass', 1)], seeds[0]
+        return
+    for s in seeds:
+        yield 'clean', [], s
+    for name in SHAPES:
+        for level in (0, 1):
+            for s in seeds:
+                yield name, [(name, level)], s
+    for a, b in PAIRS:
+        for s in seeds:
+            yield f'{a}+{b}', [(a, 1), (b, 1)], s
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    ap.add_argument('--quick', action='store_true')
+    ap.add_argument('--samples', type=int, default=2 ** 15)
+    ap.add_argument('--repeats', type=int, default=6)
+    ap.add_argument('--seeds', type=int, nargs='+', default=[11, 12])
+    args = ap.parse_args(argv)
+    rows = []
+    t0 = time.time()
+    for label, effects, seed in cases(args.quick, args.seeds):
+        d = run_case(effects, args.samples, seed, args.repeats)
+        truth = [e for e, _ in effects]
+        detected = d.baseline_gap > d.null_gap['q95']
+        top1 = d.ranking[0]['effect']
+        rows.append({'label': label, 'truth': truth, 'seed': seed,
+                     'level': effects[0][1] if effects else None, 'detected': detected,
+                     'selected': d.selected_effects, 'top1': top1,
+                     'baseline_gap': d.baseline_gap, 'final_gap': d.final_gap,
+                     'ambiguous': d.ambiguous})
+        print(f'{label:40s} seed {seed} level {rows[-1]["level"]} gap '
+              f'{d.baseline_gap:7.2f} -> {d.final_gap:6.2f} (null q95 '
+              f'{d.null_gap["q95"]:.2f}) selected {d.selected_effects} '
+              f'[{time.time() - t0:.0f} s]', flush=True)
+    report(rows)
+    return 0
+
+
+def report(rows) -> None:
+    names = list(SHAPES)
+    single = [r for r in rows if len(r['truth']) == 1]
+    print('\nconfusion (rows: true effect, columns: first selected effect; detected cases)')
+    cols = names + ['none']
+    print(' ' * 18 + ' '.join(f'{c[:8]:>8s}' for c in cols))
+    for name in names:
+        sel = [r for r in single if r['truth'][0] == name and r['detected']]
+        counts = [sum(1 for r in sel if (r['selected'] or ['none'])[0] == c) for c in cols]
+        print(f'{name[:18]:18s}' + ' '.join(f'{c:8d}' for c in counts))
+    det = [r for r in single if r['detected']]
+    ok = [r for r in det if r['selected'][:1] == r['truth']]
+    print(f'\nsingle effects: detected {len(det)}/{len(single)}; top-1 (first selected == '
+          f'truth) among detected: {len(ok)}/{len(det)} = '
+          f'{100.0 * len(ok) / max(len(det), 1):.0f} %')
+    for level in (0, 1):
+        lv = [r for r in single if r['level'] == level]
+        lv_ok = [r for r in lv if r['detected'] and r['selected'][:1] == r['truth']]
+        print(f'  magnitude level {level}: detected {sum(r["detected"] for r in lv)}/{len(lv)}, '
+              f'correct top-1 {len(lv_ok)}/{len(lv)}')
+    shrink = [1.0 - r['final_gap'] / r['baseline_gap'] for r in rows if r['truth']
+              and r['detected']]
+    if shrink:
+        print(f'median gap shrink (1 - final/baseline) over detected cases: '
+              f'{100.0 * float(np.median(shrink)):.0f} %')
+    pairs = [r for r in rows if len(r['truth']) == 2]
+    if pairs:
+        both = [r for r in pairs if set(r['truth']) <= set(r['selected'])]
+        print(f'pairs: both effects selected in {len(both)}/{len(pairs)}')
+    clean_rows = [r for r in rows if not r['truth']]
+    fa = [r for r in clean_rows if r['selected']]
+    print(f'false alarms on clean baseline records: {len(fa)}/{len(clean_rows)}'
+          + (f' ({[r["selected"] for r in fa]})' if fa else ''))
+    amb = [r for r in rows if r['ambiguous']]
+    print(f'cases with an ambiguity statement: {len(amb)}')
+
+
+if __name__ == '__main__':
+    sys.exit(main())
