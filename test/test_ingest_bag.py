@@ -98,8 +98,10 @@ def test_topic_choice_errors(tmp_path):
     with pytest.raises(InputError, match=r'several sensor_msgs/Imu topics.*/imu_a \['):
         read_imu(path)
     assert len(read_imu(path, topic='imu_b')) == 50  # leading slash optional
-    with pytest.raises(InputError, match=r"no topic '/imu_c' \(topics: /empty"):
+    with pytest.raises(InputError, match=r"no topic '/imu_c'; did you mean /imu_[ab]\? \(topi"):
         read_imu(path, topic='/imu_c')
+    with pytest.raises(InputError, match=r"no topic '/zzz'; \(topics: /empty"):
+        read_imu(path, topic='/zzz')
     with pytest.raises(InputError, match='carries sensor_msgs/msg/JointState, not'):
         read_imu(path, topic='/js')
     with pytest.raises(InputError, match='has no messages'):

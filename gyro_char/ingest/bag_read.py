@@ -7,6 +7,7 @@ iterator, decoded in blocks by ``cdr.decode_imu`` / ``ros1_imu.decode_imu_ros1``
 path (rosbags deserialisation + ``msg_adapters``) serves file-compressed bags and any payload the
 fast path declines; both give identical values. ``encoder_read`` shares ``Bag`` and the sources.
 """
+import difflib
 from pathlib import Path
 import sqlite3
 import struct
@@ -111,7 +112,9 @@ class Bag:
             topic = found[0]
         name = topic if topic in table else '/' + topic.lstrip('/')
         if name not in table:
-            raise InputError(f'{self.path}: no topic {topic!r} (topics: {listing})')
+            close = difflib.get_close_matches(name, list(table), n=1)
+            hint = f'did you mean {close[0]}? ' if close else ''
+            raise InputError(f'{self.path}: no topic {topic!r}; {hint}(topics: {listing})')
         kind, count = table[name]
         if kind not in types:
             raise InputError(f'{self.path}: topic {name} carries {kind}, not {" or ".join(types)}')
