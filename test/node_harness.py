@@ -1,0 +1,127 @@
+"""Helpers for the node tests: isolated contexts, spinning, child processes on loopback DDS."""
+import contextlib
+import json
+import os
+from pathlib import Path
+import shutil
+import subprocess
+import sys
+import time
+from typing import Callable, Dict, List, Optional
+
+from diagnostic_msgs.msg import DiagnosticArray
+from gyro_char.nodes import node_common
+from msg_adapters import fill_imu, to_stamp
+from msg_adapters.diagnostics import level_of, parse_key_values
+import rclpy
+from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from sensor_msgs.msg import Imu, JointState
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def ros_env(domain_id: int) -> Dict[str, str]:
+    """Environment for a child process: loopback-only DDS on ``domain_id``."""
+    env = dict(os.environ)
+    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    env['ROS_DOMAIN_ID'] = str(domain_id)
+    env['PYTHONPATH'] = str(ROOT) + os.pathsep + env.get('PYTHONPATH', '')
+    env.setdefault('MPLBACKEND', 'Agg')
+    return env
+
+
+def node_command(executable: str) -> List[str]:
+    """The installed node executable, or the module run by this Python when not installed."""
+    path = shutil.which(executable, path=str(Path(sys.executable).parent) + os.pathsep
+                        + os.environ.get('PATH', ''))
+    if path:
+        return [path]
+    return [sys.executable, '-m', f'gyro_char.nodes.{executable}']
+
+
+@contextlib.contextmanager
+def ros_context(domain_id: int):
+    """An isolated rclpy context on ``domain_id`` (loopback only), shut down afterwards."""
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=domain_id)
+    try:
+        yield context
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+def spin_until(executor, predicate: Callable[[], bool], timeout: float) -> bool:
+    """Spin until ``predicate()`` is true or ``timeout`` seconds passed; return the predicate."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        executor.spin_once(timeout_sec=0.02)
+    return predicate()
+
+
+class Listener:
+    """Collects DiagnosticArray statuses by name from several topics (last one wins)."""
+
+    def __init__(self, node, topics: List[str], qos=10) -> None:
+        self.last: Dict[str, tuple] = {}
+        self.count: Dict[str, int] = {}
+        for topic in topics:
+            node.create_subscription(DiagnosticArray, topic, self._on, qos)
+
+    def _on(self, msg) -> None:
+        for st in msg.status:
+            self.last[st.name] = (level_of(st), st.message, parse_key_values(st))
+            self.count[st.name] = self.count.get(st.name, 0) + 1
+
+    def values(self, name: str) -> Optional[dict]:
+        got = self.last.get(name)
+        return None if got is None else got[2]
+
+
+class Feeder:
+    """In-process publisher of Imu / JointState messages on the sensor-data QoS."""
+
+    def __init__(self, node, encoder: bool = True, qos: QoSProfile = qos_profile_sensor_data):
+        self.imu = node.create_publisher(Imu, 'imu/data_raw', qos)
+        self.enc = node.create_publisher(JointState, 'stand/joint_states', qos) if encoder \
+            else None
+        self.msg_imu = Imu()
+        self.msg_enc = JointState()
+
+    def imu_sample(self, t: float, gyro, accel=(0.0, 0.0, 9.81), frame_id='imu_link',
+                   raw_stamp=None) -> None:
+        msg = fill_imu(self.msg_imu, t if raw_stamp is None else 1.0, gyro, accel, frame_id)
+        if raw_stamp is not None:
+            msg.header.stamp.sec, msg.header.stamp.nanosec = raw_stamp
+        self.imu.publish(msg)
+
+    def encoder_sample(self, t: float, angle: float, name: str = 'swing') -> None:
+        to_stamp(self.msg_enc.header.stamp, t)
+        self.msg_enc.name = [name]
+        self.msg_enc.position = [float(angle)]
+        self.enc.publish(self.msg_enc)
+
+
+def make_executor(context):
+    """The executor the nodes use in production (EventsExecutor where rclpy has it)."""
+    return node_common.make_executor(context)
+
+
+def stop(proc: subprocess.Popen, timeout: float = 10.0) -> str:
+    """Stop a child we started (SIGINT, then SIGKILL); return its combined output."""
+    if proc.poll() is None:
+        proc.send_signal(2)
+        try:
+            proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    out = proc.stdout.read() if proc.stdout else b''
+    return out.decode(errors='replace') if isinstance(out, bytes) else out
+
+
+def read_json(path: Path) -> dict:
+    with open(path) as f:
+        return json.load(f)

@@ -1,0 +1,235 @@
+"""swing_kf_node on a real DDS graph: in-process (isolated context) and as a separate process."""
+import subprocess
+import sys
+
+from gyro_char.bench_sim import simulate_swing
+from gyro_char.nodes.node_common import InvalidParameter
+from gyro_char.nodes.swing_kf_node import SwingKfNode
+from node_harness import (
+    Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context, ros_env,
+    spin_until, stop)
+import numpy as np
+import pytest
+import rclpy
+from rclpy.parameter import Parameter
+from std_srvs.srv import Trigger
+
+DOMAIN_IN_PROCESS = 24
+DOMAIN_PROCESS = 25
+EPOCH = 1000.0
+EST = 'swing_kf_node: estimates'
+INPUTS = 'swing_kf_node: inputs'
+
+
+@pytest.fixture(scope='module')
+def sim():
+    return simulate_swing(duration=20.0, seed=3)
+
+
+def _graph(context, **params):
+    overrides = [Parameter(k, value=v) for k, v in params.items()]
+    node = SwingKfNode(context=context, parameter_overrides=overrides)
+    test_node = rclpy.create_node('swing_test_peer', context=context)
+    listener = Listener(test_node, ['/swing_kf_node/estimates', '/diagnostics'])
+    feeder = Feeder(test_node)
+    ex = make_executor(context)
+    ex.add_node(node)
+    ex.add_node(test_node)
+    assert spin_until(ex, lambda: feeder.imu.get_subscription_count() > 0
+                      and feeder.enc.get_subscription_count() > 0, 10.0)
+    return node, test_node, listener, feeder, ex
+
+
+def _feed_run(ex, node, feeder, run, burst=250):
+    """Publish a simulated run in bursts, waiting until the node has taken each burst."""
+    gyro = run.imu.channels['gyro_x']
+    ti, te, angle = run.imu.t, run.encoder.t, run.encoder.channels['encoder']
+    i = j = 0
+    while i < ti.size or j < te.size:
+        horizon = ti[i + burst] if i + burst < ti.size else np.inf
+        while i < ti.size and ti[i] <= horizon:
+            feeder.imu_sample(EPOCH + ti[i], (gyro[i], 0.0, 0.0))
+            i += 1
+        while j < te.size and te[j] <= horizon:
+            feeder.encoder_sample(EPOCH + te[j], angle[j])
+            j += 1
+        assert spin_until(ex, lambda: node.imu_health.received >= i
+                          and node.enc_health.received >= j, 5.0), 'messages lost in process'
+    node.process()
+    return i, j
+
+
+def _within(est, sigma, truth, k=4.0):
+    return abs(est - truth) <= k * sigma
+
+
+def test_estimates_match_truth_in_process(sim):
+    truth = sim.truth['swing']
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context, publish_rate_hz=10.0)
+        n_imu, n_enc = _feed_run(ex, node, feeder, sim)
+        assert spin_until(ex, lambda: (listener.values(EST) or {}).get('samples_gyro') == n_imu,
+                          5.0)
+        v = listener.values(EST)
+        assert v['samples_encoder'] == n_enc == sim.encoder.t.size
+        assert v['converged'] == 1 and listener.last[EST][0] == 0
+        assert _within(v['scale_factor_error'], v['scale_factor_error_sigma'],
+                       truth['scale_factor_error'])
+        assert _within(v['bias_rad_s'], v['bias_sigma_rad_s'], truth['bias'])
+        assert _within(v['bias_drift_rad_s2'], v['bias_drift_sigma_rad_s2'], truth['bias_drift'])
+        assert v['amplitude_encoder_rad'] == pytest.approx(truth['amplitude'], rel=1e-3)
+        assert v['period_s'] == truth['period_s']
+        # Input health: nothing dropped, both rates measured, streams aligned in time.
+        listener.last.pop(INPUTS, None)
+        node.publish_diagnostics()
+        assert spin_until(ex, lambda: INPUTS in listener.last, 3.0)
+        h = listener.values(INPUTS)
+        assert h['imu_accepted'] == n_imu and h['encoder_accepted'] == n_enc
+        assert h['imu_rate_hz'] == pytest.approx(1000.0, rel=0.01)
+        assert abs(h['stream_skew_s']) < 0.05
+        # ~/reset clears the filter.
+        client = peer.create_client(Trigger, '/swing_kf_node/reset')
+        assert client.wait_for_service(timeout_sec=5.0)
+        future = client.call_async(Trigger.Request())
+        assert spin_until(ex, future.done, 5.0) and future.result().success
+        assert node.core.estimates().samples == 0
+        node.destroy_node()
+
+
+def test_bad_input_is_counted_never_fatal():
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(
+            context, frame_id='imu_link', joint_name='swing', stall_timeout_s=0.5)
+        t = EPOCH
+        for k in range(300):  # clean data first
+            t = EPOCH + k * 1e-3
+            feeder.imu_sample(t, (0.1, 0.0, 0.0))
+            feeder.encoder_sample(t, 0.01 * k)
+        for k in range(5):
+            t += 1e-3
+            feeder.imu_sample(t, (float('nan'), 0.0, 0.0))
+        for k in range(3):
+            feeder.imu_sample(0.0, (0.1, 0.0, 0.0), raw_stamp=(0, 0))
+        for k in range(4):
+            feeder.imu_sample(t - 0.1 - k * 1e-3, (0.1, 0.0, 0.0))
+        for k in range(2):
+            feeder.imu_sample(t, (0.1, 0.0, 0.0))
+        for k in range(6):
+            feeder.imu_sample(t + (k + 1) * 1e-3, (0.1, 0.0, 0.0), frame_id='camera')
+        for k in range(3):
+            feeder.encoder_sample(t, 0.0, name='other_joint')
+        feeder.encoder_sample(t + 1e-3, float('inf'))
+        total = 300 + 5 + 3 + 4 + 2 + 6
+        assert spin_until(ex, lambda: node.imu_health.received == total
+                          and node.enc_health.received == 301, 5.0)
+        node.process()
+        node.publish_diagnostics()
+        assert spin_until(ex, lambda: INPUTS in listener.last, 3.0)
+        level, message, h = listener.last[INPUTS]
+        assert h['imu_dropped_non_finite'] == 5
+        assert h['imu_dropped_zero_stamp'] == 3
+        assert h['imu_dropped_backwards'] == 4
+        assert h['imu_dropped_duplicate'] == 2  # t is also the (admitted) last NaN's stamp
+        assert h['imu_dropped_wrong_frame'] == 6
+        assert h['encoder_dropped_missing_joint'] == 3
+        assert h['encoder_dropped_non_finite'] == 1
+        assert h['imu_accepted'] == 300
+        assert level == 1 and 'backwards' in message and 'camera' not in message
+        # Still alive and clean again: new data flows, one encoder stall is reported.
+        listener.last.clear()
+        for k in range(200):
+            feeder.imu_sample(t + 0.1 + k * 1e-3, (0.1, 0.0, 0.0))
+        assert spin_until(ex, lambda: node.imu_health.accepted >= 505, 5.0)
+        assert spin_until(ex, lambda: 'encoder stalled' in listener.last.get(INPUTS, ('',) * 2)[1],
+                          3.0)
+        node.destroy_node()
+
+
+def test_flood_is_capped_and_reported():
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context, max_rate_hz=200.0)
+        for k in range(600):
+            feeder.imu_sample(EPOCH + k * 1e-4, (0.1, 0.0, 0.0))
+        assert spin_until(ex, lambda: node.imu_health.received == 600, 5.0)
+        # All 600 arrived within well under a second of wall time: at most ~2 windows pass.
+        assert node.imu_health.flood_dropped >= 600 - 2 * 200
+        assert node.imu_health.accepted + node.imu_health.flood_dropped == 600
+        node.destroy_node()
+
+
+def test_streams_drifting_apart_warn():
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context, max_skew_s=0.05)
+        for k in range(400):
+            feeder.imu_sample(EPOCH + k * 1e-3, (0.1, 0.0, 0.0))
+            feeder.encoder_sample(EPOCH + 0.3 + k * 1e-3, 0.0)  # encoder clock 0.3 s ahead
+            if k % 100 == 99:
+                spin_until(ex, lambda: node.enc_health.received > k, 5.0)
+                node.process()
+        node.publish_diagnostics()
+        assert spin_until(ex, lambda: INPUTS in listener.last, 3.0)
+        level, message, h = listener.last[INPUTS]
+        assert h['stream_skew_s'] == pytest.approx(0.3, abs=0.05)
+        assert level == 1 and 'apart in time' in message
+        node.destroy_node()
+
+
+def test_parameters_are_validated():
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        with pytest.raises(InvalidParameter, match='axis'):
+            SwingKfNode(context=context, parameter_overrides=[Parameter('axis', value='w')])
+        node = SwingKfNode(context=context)
+        bad = [Parameter('axis', value='w'), Parameter('period_s', value=-1.0),
+               Parameter('period_s', value=float('nan')), Parameter('imu_topic', value='x'),
+               Parameter('publish_rate_hz', value='fast')]
+        for p in bad:
+            result = node.set_parameters([p])[0]
+            assert not result.successful and result.reason, p.name
+        assert node.get_parameter('axis').value == 'x'
+        desc = node.describe_parameter('period_s')
+        assert desc.description and desc.floating_point_range[0].from_value > 0
+        assert node.describe_parameter('imu_topic').read_only
+        ok = node.set_parameters_atomically([Parameter('period_s', value=4.0),
+                                  Parameter('axis', value='y')])
+        assert ok.successful
+        assert node.core.period_s == 4.0 and node.core_restarts == 1
+        assert node.set_parameters([Parameter('publish_rate_hz', value=5.0)])[0].successful
+        node.destroy_node()
+
+
+def test_separate_processes_over_dds(tmp_path):
+    """The installed executable with the shipped YAML, fed by the simulator in another process."""
+    env = ros_env(DOMAIN_PROCESS)
+    node = subprocess.Popen(
+        node_command('swing_kf_node') + [
+            '--ros-args', '--params-file', str(ROOT / 'config' / 'swing_kf_node.yaml'),
+            '-p', 'publish_rate_hz:=5.0'],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    summary = tmp_path / 'feed.json'
+    feed = subprocess.Popen(
+        [sys.executable, str(ROOT / 'bench' / 'bench_node_feed.py'), 'swing', '--duration',
+         '12', '--speed', '1.5', '--seed', '5', '--summary', str(summary)],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    try:
+        with ros_context(DOMAIN_PROCESS) as context:
+            peer = rclpy.create_node('swing_process_listener', context=context)
+            listener = Listener(peer, ['/swing_kf_node/estimates', '/diagnostics'])
+            ex = make_executor(context)
+            ex.add_node(peer)
+            assert feed.wait(timeout=60) == 0, feed.stdout.read().decode()
+            sent = read_json(summary)['sent']
+            assert spin_until(ex, lambda: (listener.values(EST) or {}).get('samples_gyro')
+                              == sent['imu'], 10.0), listener.last
+            v = listener.values(EST)
+            truth = read_json(summary)['truth']['swing']
+            assert v['samples_encoder'] == sent['encoder']  # nothing dropped by the node
+            assert _within(v['scale_factor_error'], v['scale_factor_error_sigma'],
+                           truth['scale_factor_error'])
+            assert _within(v['bias_rad_s'], v['bias_sigma_rad_s'], truth['bias'])
+            assert v['amplitude_encoder_rad'] == pytest.approx(truth['amplitude'], rel=1e-3)
+            peer.destroy_node()
+    finally:
+        out = stop(node)
+        stop(feed)
+    assert node.returncode == 0, out
+    assert np.isfinite(v['bias_rad_s'])
