@@ -31,7 +31,7 @@ def ros_env(domain_id: int) -> Dict[str, str]:
 
 
 def node_command(executable: str) -> List[str]:
-    """The installed node executable, or the module run by this Python when not installed."""
+    """Return the installed node executable, or the module run by this Python if not installed."""
     path = shutil.which(executable, path=str(Path(sys.executable).parent) + os.pathsep
                         + os.environ.get('PATH', ''))
     if path:
@@ -41,7 +41,7 @@ def node_command(executable: str) -> List[str]:
 
 @contextlib.contextmanager
 def ros_context(domain_id: int):
-    """An isolated rclpy context on ``domain_id`` (loopback only), shut down afterwards."""
+    """Yield an isolated rclpy context on ``domain_id`` (loopback only); shut it down after."""
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     context = rclpy.Context()
     rclpy.init(context=context, domain_id=domain_id)
@@ -105,7 +105,7 @@ class Feeder:
 
 
 def make_executor(context):
-    """The executor the nodes use in production (EventsExecutor where rclpy has it)."""
+    """Return the executor the nodes use in production (EventsExecutor where rclpy has it)."""
     return node_common.make_executor(context)
 
 

@@ -190,7 +190,7 @@ def test_parameters_are_validated():
         assert desc.description and desc.floating_point_range[0].from_value > 0
         assert node.describe_parameter('imu_topic').read_only
         ok = node.set_parameters_atomically([Parameter('period_s', value=4.0),
-                                  Parameter('axis', value='y')])
+                                             Parameter('axis', value='y')])
         assert ok.successful
         assert node.core.period_s == 4.0 and node.core_restarts == 1
         assert node.set_parameters([Parameter('publish_rate_hz', value=5.0)])[0].successful
