@@ -73,11 +73,25 @@ def kalibr_yaml(fits, rate_hz: float, topic: str) -> str:
     return '\n'.join(lines) + '\n'
 
 
+def write_outputs(out: str, res, fits, topic: str, title: str = '') -> None:
+    """Write allan.json, noise.json, imu.yaml and allan.png in ``out`` (also for allan_node)."""
+    from gyro_char.report.allan import plot_allan
+
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, 'allan.json'), 'w') as fh:
+        json.dump(allan_json(res), fh)
+    with open(os.path.join(out, 'noise.json'), 'w') as fh:
+        json.dump({'channels': {n: f.to_json() for n, f in fits.items()}}, fh, indent=2)
+    with open(os.path.join(out, 'imu.yaml'), 'w') as fh:
+        fh.write(kalibr_yaml(fits, 1.0 / res.dt, topic))
+    plot_allan(res, fits, os.path.join(out, 'allan.png'), title=title)
+
+
 def run(args) -> int:
     from gyro_char.allan_edf import add_confidence, alpha_from_model
     from gyro_char.allan_input import compute
     from gyro_char.noise_fit import fit_result
-    from gyro_char.report.allan import plot_allan, table
+    from gyro_char.report.allan import table
     import numpy as np
 
     rec = read_imu(args.input, topic=args.topic, quiet=args.quiet)
@@ -94,16 +108,9 @@ def run(args) -> int:
         alpha = np.stack([alpha_from_model(res.tau, fits[n].coeffs()) for n in res.channels],
                          axis=1)
         add_confidence(res, alpha)
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, 'allan.json'), 'w') as fh:
-        json.dump(allan_json(res), fh)
-    with open(os.path.join(args.out, 'noise.json'), 'w') as fh:
-        json.dump({'channels': {n: f.to_json() for n, f in fits.items()}}, fh, indent=2)
-    with open(os.path.join(args.out, 'imu.yaml'), 'w') as fh:
-        fh.write(kalibr_yaml(fits, 1.0 / res.dt, args.topic or DEFAULT_TOPIC))
-    plot_allan(res, fits, os.path.join(args.out, 'allan.png'),
-               title=f'{os.path.basename(str(args.input))}: {res.n_samples} samples at '
-                     f'{1.0 / res.dt:.6g} Hz, fit {args.fit}')
+    write_outputs(args.out, res, fits, args.topic or DEFAULT_TOPIC,
+                  title=f'{os.path.basename(str(args.input))}: {res.n_samples} samples at '
+                        f'{1.0 / res.dt:.6g} Hz, fit {args.fit}')
     for note in res.notes:
         print(f'note: {note}', file=sys.stderr)
     print('\n'.join(table(fits)))
