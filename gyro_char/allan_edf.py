@@ -116,14 +116,17 @@ def _lag1(x: np.ndarray) -> np.ndarray:
     return np.sum(res[1:] * res[:-1], axis=0) / np.where(den > 0, den, np.inf)
 
 
-def alpha_from_acf(rate: np.ndarray, m: np.ndarray) -> np.ndarray:
+def alpha_from_acf(rate: np.ndarray, m: np.ndarray,
+                   beyond: Optional[np.ndarray] = None) -> np.ndarray:
     """
     Return the integer noise exponent alpha per (m, channel) from lag-1 autocorrelation.
 
     Riley & Greenhall (2004) on rate ("frequency") data averaged over m: with r1 the lag-1 ACF,
     rho = r1 / (1 + r1), and alpha = -2 rho (d = 0), else the series is differenced (d = 1, 2)
-    and alpha = -2 (rho + d). Where the averaged series has fewer than 30 points the largest
-    identifiable m's alpha is carried forward; at most the first 100 000 averages are used.
+    and alpha = -2 (rho + d). Where the averaged series has fewer than 30 points the ACF cannot
+    identify anything: there ``beyond`` (K, C) is used if given (e.g. ``alpha_from_slope`` of
+    the curve), else the largest identifiable m's alpha is carried forward. At most the first
+    100 000 averages are used.
     """
     rate = np.asarray(rate, dtype=np.float64)
     rate2 = rate[:, None] if rate.ndim == 1 else rate
@@ -135,7 +138,7 @@ def alpha_from_acf(rate: np.ndarray, m: np.ndarray) -> np.ndarray:
     for k, mm in enumerate(m):
         n_avg = rate2.shape[0] // int(mm)
         if n_avg < MIN_ACF_POINTS:
-            out[k] = last
+            out[k] = last if beyond is None else beyond[k]
             continue
         n_avg = min(n_avg, MAX_ACF_POINTS)
         y = np.diff(csum[:n_avg * mm + 1:mm], axis=0) / mm

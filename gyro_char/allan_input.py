@@ -19,7 +19,7 @@ from typing import List, Optional, Sequence, Tuple
 
 from gyro_char.allan import (allan_sums, AllanResult, m_grid, POINTS_PER_OCTAVE, pool,
                              taus_to_m)
-from gyro_char.allan_edf import add_confidence, alpha_from_acf
+from gyro_char.allan_edf import add_confidence, alpha_from_acf, alpha_from_slope
 from gyro_char.recordings import ACCEL_CHANNELS, GYRO_CHANNELS, InputError, Recording
 import numpy as np
 
@@ -78,7 +78,10 @@ def compute(rec: Recording, channels: Optional[Sequence[str]] = None,
             taus: Optional[Sequence[float]] = None, m_max: Optional[int] = None,
             points_per_octave: int = POINTS_PER_OCTAVE) -> AllanResult:
     """
-    Return the overlapping Allan variance of ``rec`` with 68 % intervals (noise ID by ACF).
+    Return the overlapping Allan variance of ``rec`` with 68 % intervals.
+
+    Noise type for the EDF: lag-1 ACF where the m-averaged series has >= 30 points, the local
+    log-log slope of the curve beyond.
 
     Grid: the paper's (optionally capped at ``m_max``) or the user's ``taus`` (s).
     """
@@ -108,4 +111,5 @@ def compute(rec: Recording, channels: Optional[Sequence[str]] = None,
     sums.notes = list(rec.notes) + notes
     res = sums.result()
     a, b = max(segs, key=lambda s: s[1] - s[0])
-    return add_confidence(res, alpha_from_acf(data[a:b], res.m))
+    alpha = alpha_from_acf(data[a:b], res.m, beyond=alpha_from_slope(res.tau, res.avar))
+    return add_confidence(res, alpha)

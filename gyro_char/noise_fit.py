@@ -22,11 +22,14 @@ ln sigma^2 (``allan_cov``: EDF variances, correlation between taus exp(-octaves 
 the noise type, 1.5 octaves for white, 2.2 for flicker, 6 for random walk, measured on simulated
 records; Gaussian copula with exact log-chi-square marginals) and refitted with the same
 estimator; the
-interval is the 16..84 % percentile range. Term selection: a term is ``resolved`` when it makes
-up at least ``SHARE_MIN`` of p^2 at some fitted tau and its interval excludes zero by a margin
-(lower bound > ``LO_MIN`` x value). Otherwise the record does not support it and the reported
+interval is the 16..84 % percentile range. Term selection (``_Fitter.select``): backward
+elimination on the correlated chi-square of the log residuals; a term stays when dropping it
+(refitting the rest) costs at least ``GAIN_MIN`` and it makes up at least ``SHARE_MIN`` of p^2
+at some fitted tau. The kept terms are refitted and bootstrapped; a kept term is ``resolved``
+when its interval also excludes zero by a margin (lower bound > ``LO_MIN`` x value). Otherwise the record does not support it and the reported
 value is an upper bound: the largest coefficient for which the term alone stays under the
-upper 68 % Allan bound at every tau (every term is non-negative, so none can exceed the curve).
+one-sided 95 % upper Allan bound at every tau (every term is non-negative, so none can exceed
+the curve).
 """
 from dataclasses import dataclass, field
 from typing import Dict, Optional, Tuple
@@ -38,6 +41,10 @@ from scipy import optimize, special, stats
 
 SHARE_MIN = 0.3
 LO_MIN = 0.2
+GAIN_MIN = 4.0
+NUGGET = 0.3
+BOUND_CI = 0.9
+R_INDEX = TERMS.index('R')
 CORR_OCTAVES = {2: 1.5, 1: 1.5, 0: 1.5, -1: 2.2, -2: 6.0}
 N_BOOT = 100
 
@@ -172,6 +179,65 @@ def fit_weighted(a_mat, avar, edf, z0, max_iter: int = 30) -> np.ndarray:
     return z
 
 
+class _Fitter:
+    """One channel's fitting problem: the estimator on any subset of the terms."""
+
+    def __init__(self, a_mat, avar, edf, cov, method):
+        self.a_mat, self.avar, self.edf, self.method = a_mat, avar, edf, method
+        self.median_bias = (np.ones_like(edf) if method == 'l1-raw'
+                            else stats.chi2.median(edf) / edf)
+        # A nugget (independent share of each point's variance) keeps the precision matrix
+        # well conditioned: the modelled correlations are approximate, and inverting them
+        # exactly lets tiny eigen-directions (local slopes) dominate the chi-square.
+        self.prec = np.linalg.inv(cov + NUGGET * np.diag(np.diag(cov)))
+        self.bias = special.digamma(edf / 2.0) - np.log(edf / 2.0)  # E ln(chi2_v / v)
+
+    def fit(self, active, curve=None, z0=None) -> np.ndarray:
+        curve = self.avar if curve is None else curve
+        a_act = self.a_mat[:, active]
+        z = np.zeros(self.a_mat.shape[1])
+        za = fit_l1(a_act, curve / self.median_bias, None if z0 is None else z0[active])
+        if self.method == 'weighted':
+            za = fit_weighted(a_act, curve, self.edf, za)
+        z[active] = za
+        return z
+
+    def chi2(self, z) -> float:
+        """Correlated chi-square r^T C^-1 r of the (bias-centred) log residuals."""
+        r = np.log(self.avar) - self.bias - np.log(np.maximum(self.a_mat @ z, 1e-300))
+        return float(r @ self.prec @ r)
+
+    def select(self, z):
+        """
+        Backward elimination: return (active mask, z refitted on it).
+
+        Repeatedly drop the term whose removal (with the others refitted) costs the least
+        correlated chi-square, while that cost is below ``GAIN_MIN`` (about 2 sigma) or the
+        term never reaches ``SHARE_MIN`` of the curve. Collinear pairs lose one member, not
+        both. A random walk's chance trend looks like a ramp at long tau, so among the weak
+        terms R is dropped first: a ramp is reported only when K cannot explain the bend.
+        """
+        allowed = np.ones(z.size, dtype=bool)  # terms not eliminated (may be 0 just now)
+        while np.count_nonzero(z > 0) > 1:
+            share = (self.a_mat * z) / (self.a_mat @ z)[:, None]
+            base = self.chi2(z)
+            gains, fits = {}, {}
+            for j in np.flatnonzero(allowed & (z > 0)):
+                trial = allowed.copy()
+                trial[j] = False
+                fits[j] = self.fit(trial, z0=z)
+                gains[j] = -np.inf if share[:, j].max() < SHARE_MIN else self.chi2(fits[j]) - base
+            weak = [j for j in gains if gains[j] < GAIN_MIN]
+            if not weak:
+                break
+            # A ramp is claimed only if the random walk cannot explain the bend: R goes first.
+            drop = R_INDEX if R_INDEX in weak else min(weak, key=gains.get)
+            allowed[drop] = False
+            z = fits[drop]
+        active = allowed & (z > 0)
+        return active, z
+
+
 def _draw_curves(p2, edf, cov, n, rng):
     # Gaussian copula with exact log-chi-square marginals around the fitted curve.
     chol = np.linalg.cholesky(cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov))))
@@ -182,13 +248,13 @@ def _draw_curves(p2, edf, cov, n, rng):
 
 def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: str = 'l1',
               tau_min: Optional[float] = None, tau_max: Optional[float] = None,
-              n_boot: int = N_BOOT, rng: Optional[np.random.Generator] = None,
-              avar_hi: Optional[np.ndarray] = None) -> NoiseFit:
+              n_boot: int = N_BOOT, rng: Optional[np.random.Generator] = None) -> NoiseFit:
     """
     Fit formula (4) to one channel's curve; return values, 68 % intervals and ``resolved``.
 
-    ``edf`` (K,) and ``alpha`` (K,) come from ``gyro_char.allan_edf``; ``avar_hi`` (upper
-    68 % Allan variance) sets the upper bound of unresolved terms (default: from ``edf``).
+    ``edf`` (K,) and ``alpha`` (K,) come from ``gyro_char.allan_edf``. The upper bound of an
+    unresolved term is the largest coefficient whose term alone stays under the 95 % upper
+    bound of the Allan variance at every fitted tau.
     """
     kind = sensor_kind(channel)
     tau, avar, edf = (np.asarray(v, dtype=np.float64) for v in (tau, avar, edf))
@@ -205,32 +271,18 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
     cov = allan_cov(tau_f, edf_f, alpha_f)
     if method not in ('l1', 'l1-raw', 'weighted'):
         raise ValueError(f'unknown fit method {method!r}')
-    median_bias = (np.ones_like(edf_f) if method == 'l1-raw'
-                   else stats.chi2.median(edf_f) / edf_f)
-    z = fit_l1(a_mat, avar_f / median_bias)
-    if method == 'weighted':
-        z = fit_weighted(a_mat, avar_f, edf_f, z)
+    fitter = _Fitter(a_mat, avar_f, edf_f, cov, method)
+    active, z = fitter.select(fitter.fit(np.ones(len(TERMS), dtype=bool)))
     rng = rng or np.random.default_rng(0)
-    p2 = a_mat @ z
-    boot = []
-    for curve in _draw_curves(p2, edf_f, cov, n_boot, rng):
-        zb = fit_l1(a_mat, curve / median_bias, z0=z)
-        if method == 'weighted':
-            zb = fit_weighted(a_mat, curve, edf_f, zb)
-        boot.append(zb)
-    boot = np.sqrt(np.maximum(np.array(boot), 0.0))
+    boot = np.array([fitter.fit(active, curve, z0=z)
+                     for curve in _draw_curves(a_mat @ z, edf_f, cov, n_boot, rng)])
+    boot = np.sqrt(np.maximum(boot, 0.0))
     coef = np.sqrt(np.maximum(z, 0.0))
     lo, hi = np.percentile(boot, [100 * 0.1587, 100 * 0.8413], axis=0)
-    if avar_hi is None:
-        avar_hi = chi2_interval(np.sqrt(avar_f), edf_f)[1] ** 2
-    else:
-        avar_hi = np.asarray(avar_hi, dtype=np.float64)[sel]
-    share = (a_mat * z) / p2[:, None]
+    avar_hi = chi2_interval(np.sqrt(avar_f), edf_f, BOUND_CI)[1] ** 2
     terms = {}
     for j, t in enumerate(TERMS):
-        resolved = bool(coef[j] > 0 and share[:, j].max() >= SHARE_MIN
-                        and lo[j] > LO_MIN * coef[j])
-        if resolved:
+        if active[j] and lo[j] > LO_MIN * coef[j]:
             terms[t] = TermEstimate(float(coef[j]), SI_UNITS[kind][t],
                                     (float(lo[j]), float(hi[j])), True)
         else:
@@ -247,6 +299,5 @@ def fit_result(res, *, method: str = 'l1', tau_min: Optional[float] = None,
     for c, name in enumerate(res.channels):
         out[name] = fit_noise(res.tau, res.avar[:, c], res.edf[:, c], res.alpha[:, c],
                               channel=name, method=method, tau_min=tau_min, n_boot=n_boot,
-                              rng=np.random.default_rng(seed + c),
-                              avar_hi=res.adev_hi[:, c] ** 2)
+                              rng=np.random.default_rng(seed + c))
     return out
