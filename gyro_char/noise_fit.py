@@ -21,12 +21,13 @@ Two estimators over z = [R^2, K^2, B^2, N^2, Q^2] >= 0, p^2(tau) = A z:
 ln sigma^2 (``allan_cov``: EDF variances, correlation between taus exp(-octaves / l) with l from
 the noise type, 1.5 octaves for white, 2.2 for flicker, 6 for random walk, measured on simulated
 records; Gaussian copula with exact log-chi-square marginals) and refitted with the same
-estimator; the
-interval is the 16..84 % percentile range. Term selection (``_Fitter.select``): backward
-elimination on the correlated chi-square of the log residuals; a term stays when dropping it
-(refitting the rest) costs at least ``GAIN_MIN`` and it makes up at least ``SHARE_MIN`` of p^2
-at some fitted tau. The kept terms are refitted and bootstrapped; a kept term is ``resolved``
-when its interval also excludes zero by a margin (lower bound > ``LO_MIN`` x value). Otherwise the record does not support it and the reported
+estimator; the interval is the 16..84 % percentile range.
+
+Term selection (``_Fitter.select``): backward elimination on the correlated chi-square of the
+log residuals; a term stays when dropping it (refitting the rest) costs at least ``GAIN_MIN``
+and it makes up at least ``SHARE_MIN`` of p^2 at some fitted tau. The kept terms are refitted
+and bootstrapped; a kept term is ``resolved`` when its interval also excludes zero by a margin
+(lower bound > ``LO_MIN`` x value). Otherwise the record does not support it and the reported
 value is an upper bound: the largest coefficient for which the term alone stays under the
 one-sided 95 % upper Allan bound at every tau (every term is non-negative, so none can exceed
 the curve).
