@@ -225,3 +225,16 @@ def test_fuzz_ros1_payloads_match_rosbags():
             assert np.array_equal(got.view(np.int64),
                                   np.array([stamp] + list(six)).view(np.int64)), f'case {i}'
     assert accepted > 500
+
+
+def test_fuzz_metadata_yaml(tmp_path):
+    write_bag(str(tmp_path / 'b'), imu_recording(100))
+    meta = tmp_path / 'b' / 'metadata.yaml'
+    original = meta.read_bytes()
+    rng = np.random.default_rng(17)
+    for _ in range(200):
+        meta.write_bytes(_mutate(rng, original))
+        try:
+            read_imu(str(tmp_path / 'b'), quiet=True)
+        except InputError as exc:
+            assert '\n' not in str(exc)
