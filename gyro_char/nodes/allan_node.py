@@ -1,0 +1,379 @@
+"""
+allan_node: Allan variance and IEEE 952 noise terms of a live static IMU record.
+
+Per message the callback checks the stamp (``StreamHealth.admit``) and appends the six SI
+channels to a deque; a timer drains it into ``AllanLive`` (segmented streaming accumulator,
+motion detector) every ``processing_period_s`` and writes an atomic checkpoint every
+``checkpoint_period_s``. ``~/compute`` publishes the Allan curve at once and runs the noise fit
+in a worker thread (it takes seconds; ingestion goes on meanwhile), then publishes ``~/noise``
+and, with ``output_dir`` set, writes the files of ``gyro-char allan``.
+"""
+from collections import deque
+import math
+import os
+import threading
+import time
+from typing import Any, Dict, List, Optional
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from gyro_char.allan_live import AllanLive
+from gyro_char.checkpoint import load_checkpoint, PeriodicCheckpoint
+from gyro_char.nodes.node_common import (
+    declare, InvalidParameter, LATCHED_1, Param, RELIABLE_10, sensor_qos, spin,
+    split_at_markers, validate)
+from gyro_char.recordings import IMU_CHANNELS, InputError
+from gyro_char.stream_health import DROP, RESTART, StreamHealth
+from msg_adapters.diagnostics import (
+    diagnostic_array, diagnostic_status, ERROR, multiarray, OK, WARN)
+import numpy as np
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+from std_srvs.srv import Trigger
+
+NAME = 'allan_node'
+CURVE_QUANTITIES = ('tau_s', 'adev', 'adev_lo', 'adev_hi')
+# Key suffixes of the SI units of noise.json (DESIGN.md section 4), gyro then accel.
+UNIT_KEYS = {
+    'gyro': {'N': 'rad_sqrt_s', 'B': 'rad_s', 'K': 'rad_s_sqrt_s', 'Q': 'rad', 'R': 'rad_s2'},
+    'accel': {'N': 'm_s_sqrt_s', 'B': 'm_s2', 'K': 'm_s2_sqrt_s', 'Q': 'm_s', 'R': 'm_s3'},
+}
+
+PARAMS = [
+    Param('imu_topic', 'imu/data_raw', 'sensor_msgs/Imu input topic', read_only=True),
+    Param('input_queue_depth', 5000, 'subscription history depth (best effort)',
+          read_only=True, low=10, high=1000000),
+    Param('rate_hz', 0.0, 'IMU sample rate (Hz); 0 = median interval of the first samples',
+          read_only=True, low=0.0, high=1e6),
+    Param('m_max', 2 ** 18, 'largest averaging factor (tau_max = m_max / rate); memory is '
+          '~ 2 m_max x 6 doubles', read_only=True, low=16, high=2 ** 24),
+    Param('feed_chunk', 2000, 'samples per accumulator update (each costs O(m_max))',
+          read_only=True, low=1, high=10 ** 7),
+    Param('processing_period_s', 0.1, 'chunk timer period (s)', read_only=True, low=0.001,
+          high=10.0),
+    Param('checkpoint_path', '', 'accumulator checkpoint (.npz); resumed at start when it '
+          'exists ("" = no checkpoints)', read_only=True),
+    Param('checkpoint_period_s', 60.0, 'seconds between checkpoints (at most this much data '
+          'is lost on a crash)', low=0.1, high=86400.0),
+    Param('output_dir', '', 'if set, ~/compute also writes the files of gyro-char allan here'),
+    Param('fit_method', 'l1', 'noise fit estimator', choices=('l1', 'weighted', 'l1-raw')),
+    Param('fit_bootstrap', 50, 'bootstrap curves for the 68 % intervals of the fit', low=2,
+          high=1000),
+    Param('fit_tau_min_s', 0.0, 'fit only tau >= this (s); 0 = all', low=0.0, high=1e6),
+    Param('frame_id', '', 'expected Imu header.frame_id ("" = accept any)'),
+    Param('hardware_id', 'imu', 'hardware_id reported in /diagnostics'),
+    Param('stall_timeout_s', 1.0, 'the input silent this long is reported stalled (s)',
+          low=0.01, high=3600.0),
+    Param('max_rate_hz', 20000.0, 'messages per second above which the excess is dropped as '
+          'a flood (0 = no limit)', low=0.0, high=1e6),
+    Param('motion_block_s', 0.5, 'motion detector block length (s)', read_only=True,
+          low=0.01, high=60.0),
+    Param('motion_variance_ratio', 4.0, 'block variance / reference variance that flags '
+          'motion', read_only=True, low=1.0, high=1e6),
+    Param('motion_mean_sigmas', 10.0, 'block-mean step, in reference scatters, that flags '
+          'motion', read_only=True, low=1.0, high=1e6),
+    Param('period_s', 0.0, 'stand period; ignored by allan_node (accepted for a common '
+          'parameter file)', low=0.0, high=1e6),
+]
+SPECS = {p.name: p for p in PARAMS}
+
+
+class AllanNode(Node):
+    """Thin rclpy front door to ``AllanLive`` and the noise fit."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(NAME, **kwargs)
+        self.p = declare(self, PARAMS)
+        p = self.p
+        self.live = AllanLive(
+            IMU_CHANNELS, rate_hz=p['rate_hz'], m_max=p['m_max'], feed_chunk=p['feed_chunk'],
+            motion={'block_s': p['motion_block_s'],
+                    'variance_ratio': p['motion_variance_ratio'],
+                    'mean_sigmas': p['motion_mean_sigmas']})
+        self.health = StreamHealth('imu', frame_id=p['frame_id'], max_rate_hz=p['max_rate_hz'])
+        self._q: deque = deque()
+        self._last_diag: Dict[str, Any] = {}
+        self._fit_thread: Optional[threading.Thread] = None
+        self._fit_lock = threading.Lock()
+        self.fit_status = 'no fit yet'
+        self.processing_errors = 0
+        self.checkpoint_errors = 0
+        self.resumed_samples = 0
+        self.checkpoint = None
+        if p['checkpoint_path']:
+            self.checkpoint = PeriodicCheckpoint(p['checkpoint_path'],
+                                                 p['checkpoint_period_s'])
+            self._resume()
+        self.create_subscription(Imu, p['imu_topic'], self._on_imu,
+                                 sensor_qos(p['input_queue_depth']))
+        self.curve_pub = self.create_publisher(Float64MultiArray, '~/allan_curve', LATCHED_1)
+        self.noise_pub = self.create_publisher(DiagnosticArray, '~/noise', LATCHED_1)
+        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', RELIABLE_10)
+        self.create_service(Trigger, '~/compute', self._on_compute)
+        self.create_service(Trigger, '~/reset', self._on_reset)
+        self.create_timer(p['processing_period_s'], self.process)
+        self.create_timer(1.0, self.publish_diagnostics)
+        self.add_on_set_parameters_callback(self._validate)
+        self.add_post_set_parameters_callback(self._apply)
+
+    # -- parameters ----------------------------------------------------------------------------
+
+    def _validate(self, params: List[Any]):
+        return validate(SPECS, params, current=self.p)
+
+    def _apply(self, params: List[Any]) -> None:
+        self.p.update({q.name: q.value for q in params if q.name in SPECS})
+        self.health.frame_id = self.p['frame_id']
+        self.health.max_rate_hz = self.p['max_rate_hz']
+        if self.checkpoint is not None:
+            self.checkpoint.period_s = self.p['checkpoint_period_s']
+
+    # -- checkpoints ---------------------------------------------------------------------------
+
+    def _resume(self) -> None:
+        path = self.checkpoint.path
+        try:
+            state = load_checkpoint(path)
+            if state is None:
+                return
+            self.live.load_state(state['live'])
+        except (InputError, KeyError, ValueError) as exc:
+            aside = f'{path}.unusable-{int(time.time())}'
+            os.replace(path, aside)
+            self.checkpoint_errors += 1
+            self.get_logger().error(f'checkpoint not resumed ({exc}); moved to {aside}')
+            self.live.reset()
+            return
+        self.resumed_samples = self.live.n_samples
+        self.get_logger().info(
+            f'resumed {self.resumed_samples} samples from {path} (last stamp '
+            f'{self.live.last_t:.6f} s)')
+
+    def write_checkpoint(self) -> None:
+        """Write the accumulator state now (atomic; a failure is counted and reported)."""
+        try:
+            self.checkpoint.write({'live': self.live.state_dict()})
+        except OSError as exc:
+            self.checkpoint_errors += 1
+            self.get_logger().error(f'checkpoint write failed: {exc}',
+                                    throttle_duration_sec=30.0)
+
+    # -- per message: O(1) ---------------------------------------------------------------------
+
+    def _on_imu(self, msg: Imu) -> None:
+        st = msg.header.stamp
+        t = st.sec + st.nanosec * 1e-9
+        code = self.health.admit(t, time.time(), msg.header.frame_id)
+        if code == DROP:
+            return
+        if code == RESTART:
+            self._q.append(None)
+        w, a = msg.angular_velocity, msg.linear_acceleration
+        self._q.append((t, w.x, w.y, w.z, a.x, a.y, a.z))
+
+    # -- per chunk -----------------------------------------------------------------------------
+
+    def process(self) -> None:
+        """Drain the queue into the accumulator; checkpoint when due. Never raises."""
+        try:
+            n = len(self._q)
+            items = [self._q.popleft() for _ in range(n)]
+            for i, run in enumerate(split_at_markers(items)):
+                if i > 0:
+                    self.live.restart_stamps()
+                if run:
+                    arr = np.array(run, dtype=np.float64)
+                    before = self.live.non_finite
+                    self.live.add(arr[:, 0], arr[:, 1:])
+                    self.health.count_non_finite(self.live.non_finite - before)
+        except (InputError, ValueError, ArithmeticError, IndexError) as exc:
+            self.processing_errors += 1
+            self.get_logger().error(f'chunk dropped: {exc!r}', throttle_duration_sec=10.0)
+        if self.checkpoint is not None and self.checkpoint.due():
+            self.write_checkpoint()
+
+    # -- compute -------------------------------------------------------------------------------
+
+    def _on_compute(self, request: Trigger.Request, response: Trigger.Response):
+        self.process()
+        try:
+            res = self.live.result()
+        except InputError as exc:
+            response.success, response.message = False, str(exc)
+            return response
+        self.curve_pub.publish(self.curve_message(res))
+        with self._fit_lock:
+            if self._fit_thread is not None and self._fit_thread.is_alive():
+                response.success = False
+                response.message = ('Allan curve published; a noise fit is still running, '
+                                    'call again when ~/noise has been published')
+                return response
+            self._fit_thread = threading.Thread(target=self._fit_and_publish, args=(res,),
+                                                daemon=True)
+            self._fit_thread.start()
+        response.success = True
+        response.message = (f'Allan curve of {res.n_samples} samples published on '
+                            f'~/allan_curve; noise fit running, result on ~/noise')
+        return response
+
+    def curve_message(self, res) -> Float64MultiArray:
+        """Return the curve as (channel, quantity, tau) with self-describing labels."""
+        data = np.stack([np.stack([res.tau, res.adev[:, c], res.adev_lo[:, c],
+                                   res.adev_hi[:, c]]) for c in range(len(res.channels))])
+        return multiarray(Float64MultiArray, MultiArrayDimension, data,
+                          [('channel', list(res.channels)), ('quantity', CURVE_QUANTITIES),
+                           ('tau_index', None)])
+
+    def fit(self, res) -> Dict[str, Any]:
+        """Fit every channel; a channel whose fit fails is reported, not fatal."""
+        from gyro_char.noise_fit import fit_noise
+        fits, failed = {}, {}
+        tau_min = self.p['fit_tau_min_s'] or None
+        for c, name in enumerate(res.channels):
+            try:
+                fits[name] = fit_noise(
+                    res.tau, res.avar[:, c], res.edf[:, c], res.alpha[:, c], channel=name,
+                    method=self.p['fit_method'], tau_min=tau_min,
+                    n_boot=self.p['fit_bootstrap'], rng=np.random.default_rng(c),
+                    avar_hi=res.adev_hi[:, c] ** 2)
+            except (ValueError, ArithmeticError, IndexError) as exc:
+                failed[name] = str(exc)
+        return {'fits': fits, 'failed': failed}
+
+    def noise_message(self, res, fitted: Dict[str, Any]) -> DiagnosticArray:
+        """Return one status per channel: N, B, K, Q, R (SI in the keys) with intervals."""
+        statuses = []
+        duration = res.n_samples * res.dt
+        for name in res.channels:
+            values: Dict[str, Any] = {'samples': res.n_samples, 'duration_s': duration,
+                                      'tau_max_s': float(res.tau[-1])}
+            fit = fitted['fits'].get(name)
+            if fit is None:
+                statuses.append(diagnostic_status(
+                    DiagnosticStatus, KeyValue, f'{NAME}: noise {name}', ERROR,
+                    'fit failed: ' + fitted['failed'].get(name, '?'), self.p['hardware_id'],
+                    values))
+                continue
+            units = UNIT_KEYS[fit.kind]
+            for term in ('N', 'B', 'K', 'Q', 'R'):
+                est = fit.terms[term]
+                key = f'{term}_{units[term]}'
+                values[key] = est.value
+                lo, hi = est.ci68 if est.ci68 is not None else (math.nan, math.nan)
+                values[f'{term}_lo_{units[term]}'] = lo
+                values[f'{term}_hi_{units[term]}'] = hi
+                values[f'{term}_resolved'] = bool(est.resolved)
+            statuses.append(diagnostic_status(
+                DiagnosticStatus, KeyValue, f'{NAME}: noise {name}', OK,
+                f'{fit.method} fit on {res.n_samples} samples ({duration:.6g} s); unresolved '
+                'terms are upper bounds', self.p['hardware_id'], values))
+        return diagnostic_array(DiagnosticArray, self.get_clock().now().to_msg(), statuses)
+
+    def _fit_and_publish(self, res) -> None:
+        started = time.monotonic()
+        try:
+            fitted = self.fit(res)
+            self.noise_pub.publish(self.noise_message(res, fitted))
+            status = f'fit of {res.n_samples} samples done in {time.monotonic() - started:.1f} s'
+            out = self.p['output_dir']
+            if out and not fitted['failed']:
+                from gyro_char.commands.allan import write_outputs
+                write_outputs(out, res, fitted['fits'], self.p['imu_topic'],
+                              title=f'{NAME}: {res.n_samples} samples at '
+                                    f'{1.0 / res.dt:.6g} Hz, fit {self.p["fit_method"]}')
+                status += f'; files written to {out}'
+            elif out:
+                status += f'; files not written (failed: {", ".join(fitted["failed"])})'
+        except (OSError, ValueError, ArithmeticError, IndexError) as exc:
+            status = f'fit/output failed: {exc!r}'
+            self.get_logger().error(status)
+        self.fit_status = status
+        self.get_logger().info(status)
+
+    # -- diagnostics ---------------------------------------------------------------------------
+
+    def health_status(self) -> tuple:
+        """Return (level, message, values) for /diagnostics."""
+        now = time.time()
+        problems = self.health.problems(now, self.p['stall_timeout_s'],
+                                        self._last_diag.get('health'))
+        self._last_diag['health'] = self.health.as_dict()
+        values: Dict[str, Any] = dict(self._last_diag['health'])
+        summary = self.live.summary()
+        values.update(summary)
+        level = WARN if problems else OK
+        if summary.get('motion_events'):
+            level = WARN
+            problems.append(f'motion detected {summary["motion_events"]} times (last '
+                            f'{summary["motion_last_start_s"]:.3f}..'
+                            f'{summary["motion_last_end_s"]:.3f} s): not a static record')
+        if self.live.off_rate_samples > self._last_diag.get('off_rate', 0):
+            level = WARN
+            problems.append(f'rate changed to {self.live.off_rate_hz:.6g} Hz: those samples are '
+                            'not accumulated (call ~/reset to restart at the new rate)')
+        self._last_diag['off_rate'] = self.live.off_rate_samples
+        new_gaps = self.live.gaps - self._last_diag.get('gaps', 0)
+        if new_gaps > 0:
+            level = WARN
+            problems.append(f'{new_gaps} new stamp gaps (segments pooled, see gap_time_s)')
+        self._last_diag['gaps'] = self.live.gaps
+        values['resumed_samples'] = self.resumed_samples
+        values['processing_errors'] = self.processing_errors
+        values['checkpoint_errors'] = self.checkpoint_errors
+        if self.checkpoint is not None:
+            values['checkpoint_writes'] = self.checkpoint.writes
+            age = self.checkpoint.age_s()
+            values['checkpoint_age_s'] = math.nan if age is None else age
+        if self.processing_errors or self.checkpoint_errors:
+            level = ERROR
+            problems.append('processing/checkpoint errors (see log)')
+        values['fit_status'] = self.fit_status
+        return level, '; '.join(problems) if problems else 'ok', values
+
+    def publish_diagnostics(self) -> None:
+        """Publish the input health, accumulation state and motion on /diagnostics."""
+        level, message, values = self.health_status()
+        status = diagnostic_status(DiagnosticStatus, KeyValue, f'{NAME}: inputs', level,
+                                   message, self.p['hardware_id'], values)
+        self.diag_pub.publish(diagnostic_array(
+            DiagnosticArray, self.get_clock().now().to_msg(), [status]))
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
+        self._q.clear()
+        self.live.reset()
+        self.health.reset()
+        self._last_diag = {}
+        self.resumed_samples = 0
+        if self.checkpoint is not None:
+            self.write_checkpoint()
+        response.success = True
+        response.message = 'accumulator, motion detector and input counters cleared'
+        return response
+
+
+def main(args=None) -> int:
+    """Run the node (Jazzy idiom; exit 2 on an invalid parameter)."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = AllanNode()
+        spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except InvalidParameter as exc:
+        print(f'{NAME}: invalid parameter: {exc}', flush=True)
+        return 2
+    finally:
+        if node is not None:
+            if node.checkpoint is not None:
+                node.process()
+                node.write_checkpoint()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
