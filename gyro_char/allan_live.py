@@ -181,7 +181,7 @@ class AllanLive:
         return pool(parts) if parts else None
 
     def result(self) -> AllanResult:
-        """Return the Allan variance with 68 % intervals (``InputError`` while no tau has a term)."""
+        """Return the Allan variance with 68 % intervals (``InputError`` until a tau has terms)."""
         sums = self.sums()
         if sums is None or not np.any(sums.counts):
             raise InputError(f'too few samples for any tau: {self.n_samples} so far')
