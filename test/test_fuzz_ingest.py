@@ -238,3 +238,19 @@ def test_fuzz_metadata_yaml(tmp_path):
             read_imu(str(tmp_path / 'b'), quiet=True)
         except InputError as exc:
             assert '\n' not in str(exc)
+
+
+@pytest.mark.parametrize('gz', [False, True])
+def test_fuzz_csv(tmp_path, gz):
+    import gzip
+    rows = '\n'.join(f'{i * 0.01:.2f},{0.1 * (i % 7):.2f},-0.30,9.81' for i in range(300))
+    text = ('t_s,gyro_x_dps,gyro_y_rads,accel_z_mps2\n' + rows + '\n').encode()
+    original = gzip.compress(text) if gz else text
+    target = tmp_path / ('x.csv.gz' if gz else 'x.csv')
+    rng = np.random.default_rng(5 + gz)
+    for _ in range(300):
+        target.write_bytes(_mutate(rng, original))
+        try:
+            read_imu(str(target), quiet=True)
+        except InputError as exc:
+            assert '\n' not in str(exc)
