@@ -4,7 +4,7 @@ from pathlib import Path
 from gyro_char.recordings import IMU_CHANNELS, Recording
 import numpy as np
 from rosbags.rosbag1 import Writer as Writer1
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 from rosbags.typesys import get_typestore, Stores
 
 STORE2 = get_typestore(Stores.ROS2_JAZZY)
@@ -53,11 +53,18 @@ def vector3_msg(t, x):
         vector=ty['geometry_msgs/msg/Vector3'](x=float(x), y=0.0, z=0.0))
 
 
-def write_ros2(path, topics, storage='mcap'):
-    """``topics``: {name: (msgtype, [(t, msg, little_endian), ...])}; messages interleaved."""
+def write_ros2(path, topics, storage='mcap', compression=None):
+    """
+    Write ``topics``: {name: (msgtype, [(t, msg, little_endian), ...])}, messages interleaved.
+
+    ``compression``: None or 'storage' / 'file' / 'message' (zstd), as rosbags offers.
+    """
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     events = []
-    with Writer(Path(path), version=9, storage_plugin=plugin) as writer:
+    writer = Writer(Path(path), version=9, storage_plugin=plugin)
+    if compression:
+        writer.set_compression(CompressionMode[compression.upper()], CompressionFormat.ZSTD)
+    with writer:
         for name, (msgtype, msgs) in topics.items():
             conn = writer.add_connection(name, msgtype, typestore=STORE2)
             events += [(t, conn, msg, le) for t, msg, le in msgs]
