@@ -77,3 +77,14 @@ def test_slope_noise_id():
     tau = np.logspace(-2, 3, 60)
     for mu, alpha in ((-2.0, 2), (-1.0, 0), (0.0, -1), (1.0, -2)):
         assert np.all(alpha_from_slope(tau, tau ** mu) == alpha)
+
+
+def test_stream_result_feeds_the_fit():
+    from gyro_char.noise_fit import fit_result
+    rate = generate(100_000, DT, N=2e-3, rng=np.random.default_rng(9))
+    acc = AllanAccumulator(DT, 1, m_max=8192, channels=('gyro_z',))
+    for chunk in np.array_split(rate, 37):
+        acc.add(chunk[:, None])
+    fit = fit_result(acc.result(), n_boot=10)['gyro_z']
+    assert fit.terms['N'].resolved
+    assert fit.terms['N'].value == pytest.approx(2e-3, rel=0.03)
