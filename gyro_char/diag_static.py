@@ -179,7 +179,8 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     tau_max = obs.octave_m(n)[-1] * dt
     sig_long = base.N / np.sqrt(tau_max)
     sig_sample = base.N / np.sqrt(dt)
-    tones = obs.detected_tones(x, dt)
+    # The most prominent narrow peak, however weak: if a tone is there at all, that is where.
+    tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1)
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
