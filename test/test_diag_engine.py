@@ -1,0 +1,58 @@
+# The diagnosis engine on a toy problem with known answers: ranking, greedy stop, ambiguity.
+from gyro_char import diagnose
+from gyro_char.diag_fit import EffectSpace, Param
+import numpy as np
+
+PATTERN = np.sin(np.linspace(0, 3, 12))
+OTHER = np.r_[np.ones(6), -np.ones(6)]
+
+
+def _problem(real_shift, real_other=0.0, seed=0):
+    """Observable block 'a' = noise + d*PATTERN (two look-alike effects) + o*OTHER."""
+    def simulate(i, effects, s):
+        rng = np.random.default_rng(s)
+        a = 0.1 * rng.standard_normal(12)
+        for name, p in effects:
+            if name in ('time_delay', 'g_sensitivity'):
+                a = a + p['k'] * PATTERN
+            elif name == 'vibration':
+                a = a + p['k'] * OTHER
+        return {'a': a}
+
+    rng = np.random.default_rng(1000 + seed)
+    real = {'a': 0.1 * rng.standard_normal(12) + real_shift * PATTERN + real_other * OTHER}
+    spaces = [EffectSpace(n, [Param('k', 0.01, 10.0)])
+              for n in ('time_delay', 'g_sensitivity', 'vibration')]
+    return diagnose.Problem(kind='toy', reals=[real], simulate=simulate, spaces=spaces,
+                            ranges=[{'a': np.c_[np.arange(12), np.arange(12) + 1.0]}],
+                            units={'a': 'bin'})
+
+
+def test_no_effect_is_selected_when_the_baseline_explains_the_record():
+    d = diagnose.run(_problem(0.0), repeats=10)
+    assert d.selected_effects == [] and d.steps == []
+    assert d.final_gap == d.baseline_gap
+    assert len(d.ranking) == 3
+
+
+def test_look_alike_effects_are_reported_as_ambiguous_with_a_separating_run():
+    d = diagnose.run(_problem(2.0), repeats=10)
+    assert d.baseline_gap > 5
+    assert d.selected_effects[0] in ('time_delay', 'g_sensitivity')
+    assert len(d.selected_effects) == 1              # the unrelated effect is not added
+    assert abs(d.steps[0]['params']['k'] - 2.0) < 0.2
+    amb = d.ambiguous[0]
+    assert set(amb['effects']) == {'time_delay', 'g_sensitivity'}
+    assert 'two periods' in amb['separating_run']
+    assert d.where[0]['observable'] == 'a'
+    js = d.to_json()
+    assert js['ambiguous'] and js['gap_metric']
+
+
+def test_two_effects_are_added_greedily_in_order_of_size():
+    d = diagnose.run(_problem(0.0, real_other=1.5), repeats=10)
+    assert d.selected_effects == ['vibration']
+    d2 = diagnose.run(_problem(3.0, real_other=1.0), repeats=10)
+    assert d2.selected_effects[0] in ('time_delay', 'g_sensitivity')
+    assert 'vibration' in d2.selected_effects
+    assert d2.final_gap < d2.steps[0]['gap_after'] < d2.baseline_gap
