@@ -23,16 +23,18 @@ from dataclasses import dataclass, field
 from typing import Optional, Tuple
 
 from gyro_char.swing_model import (
-    E3, FilterResult, GYRO_ANCHOR_S, prior_information_sqrt, regressor, scaling, TIME_SCALE_S,
-    transition)
+    E3, FilterResult, GYRO_ANCHOR_S, LONG_BLOCK_PERIODS, prior_information_sqrt, regressor,
+    scaling, TIME_SCALE_S, transition)
 import numpy as np
 from scipy.linalg.lapack import dgeqrf
+from scipy.stats import chi2
 
 ENCODER = 'encoder'
 GYRO = 'gyro'
 NOISE_BLOCK = 64  # gyro samples per increment when estimating N from the residuals
 MIN_BLOCKS = 20
 QR_ROWS = 1024
+MIN_LONG_BLOCKS = 8
 
 
 def encoder_rows(tau: np.ndarray, z: np.ndarray, period_s: float):
@@ -144,6 +146,9 @@ class StreamState:
     blocks: Srif = field(default_factory=Srif)
     knot_tau: float = float('nan')
     knot_z: float = float('nan')
+    # Low-frequency check on increments over LONG_BLOCK_PERIODS swing periods (time-defined).
+    long_blocks: Srif = field(default_factory=Srif)
+    long_knot: Tuple[float, float, int] = (float('nan'), float('nan'), -1)
 
 
 def _fold_blocks(st: StreamState, tau: np.ndarray, z: np.ndarray, period_s: float) -> None:
@@ -157,6 +162,40 @@ def _fold_blocks(st: StreamState, tau: np.ndarray, z: np.ndarray, period_s: floa
         st.blocks.add(*increment_rows(kt[:-1], kt[1:], kz[:-1], kz[1:], period_s))
     if kt.size:
         st.knot_tau, st.knot_z = float(kt[-1]), float(kz[-1])
+
+
+def _fold_long_blocks(st: StreamState, tau: np.ndarray, z: np.ndarray, period_s: float) -> None:
+    """Add increments between the first samples of successive time blocks to st.long_blocks."""
+    idx = np.floor(tau / (LONG_BLOCK_PERIODS * period_s)).astype(np.int64)
+    first = np.empty(idx.size, dtype=bool)
+    first[0] = idx[0] != st.long_knot[2]
+    first[1:] = idx[1:] != idx[:-1]
+    kt, kz = tau[first], z[first]
+    if st.long_knot[2] >= 0:
+        kt = np.concatenate([[st.long_knot[0]], kt])
+        kz = np.concatenate([[st.long_knot[1]], kz])
+    if kt.size >= 2:
+        st.long_blocks.add(*increment_rows(kt[:-1], kt[1:], kz[:-1], kz[1:], period_s))
+    if kt.size:
+        st.long_knot = (float(kt[-1]), float(kz[-1]), int(idx[-1]))
+
+
+def low_frequency_scale(st: StreamState, noise: float) -> Tuple[float, Optional[float]]:
+    """
+    Sigma scale for the gyro's bias and drift, and the measured low-frequency noise ratio.
+
+    The filter's noise model is white rate noise; a gyro's bias instability (flicker) and rate
+    random walk add power at low frequencies, which is where bias and drift are estimated. The
+    residual increments over blocks of LONG_BLOCK_PERIODS periods measure the noise density
+    there; when it exceeds ``noise`` significantly (chi-square test at 95 %), bias and drift
+    sigmas are scaled by the ratio. Returns (1, None) with fewer than MIN_LONG_BLOCKS blocks.
+    """
+    rows = st.long_blocks.rows
+    if rows < MIN_LONG_BLOCKS:
+        return 1.0, None
+    ratio = st.long_blocks.noise_scale() / noise
+    dof = rows - 5
+    return (ratio if ratio ** 2 > chi2.ppf(0.95, dof) / dof else 1.0), ratio
 
 
 def gyro_noise(srif: Srif, st: StreamState) -> Optional[float]:
@@ -184,6 +223,7 @@ def fold(srif: Srif, st: StreamState, tau: np.ndarray, z: np.ndarray, period_s: 
         prev = None if st.count == 0 else (st.last_tau, st.last_z)
         srif.add(*gyro_rows(tau, z, period_s, st.count, prev))
         _fold_blocks(st, tau, z, period_s)
+        _fold_long_blocks(st, tau, z, period_s)
     st.count += len(tau)
     st.last_tau, st.last_z = float(tau[-1]), float(z[-1])
 
@@ -202,8 +242,10 @@ def result(srif: Srif, st: StreamState, period_s: float,
         g = regressor(st.last_tau, period_s)
         m = m - np.outer(E3, g)
         x = m @ theta + E3 * st.last_z
+    scale, ratio = low_frequency_scale(st, noise) if st.kind == GYRO else (1.0, None)
     return FilterResult(x=x, P=m @ p_theta @ m.T, tau=st.last_tau, samples=st.count,
-                        noise=float(noise), noise_estimated=estimated, theta=theta)
+                        noise=float(noise), noise_estimated=estimated, theta=theta,
+                        rate_sigma_scale=scale, low_frequency_ratio=ratio)
 
 
 def run(kind: str, tau: np.ndarray, z: np.ndarray, period_s: float,

@@ -32,6 +32,8 @@ PRIOR_SD = np.array([1.0, 1.0, 1.0, 1.0, 0.01])
 GYRO_ANCHOR_S = 1.0
 # Time unit of the scaled regressors (numerical conditioning of tau and tau^2/2 columns).
 TIME_SCALE_S = 100.0
+# Block length (swing periods) of the gyro's low-frequency noise check (swing_batch).
+LONG_BLOCK_PERIODS = 10.0
 
 
 def transition(dt: float, period_s: float) -> np.ndarray:
@@ -110,6 +112,10 @@ class FilterResult:
     noise_estimated: bool
     # The deterministic model's parameters X(t_ref) (without the gyro's random walk), for plots.
     theta: Optional[np.ndarray] = None
+    # Gyro: scale on the bias/drift sigmas from the low-frequency noise check
+    # (swing_batch.low_frequency_scale) and the measured ratio (None: not checked).
+    rate_sigma_scale: float = 1.0
+    low_frequency_ratio: Optional[float] = None
 
     def amplitude(self) -> Estimate:
         a = float(np.hypot(self.x[0], self.x[1]))
@@ -119,10 +125,12 @@ class FilterResult:
     def w0(self) -> Estimate:
         """w0_hat = X4 - X5 tau: the rate offset at t_ref."""
         j = np.array([0.0, 0.0, 0.0, 1.0, -self.tau])
-        return Estimate(float(j @ self.x), float(np.sqrt(max(j @ self.P @ j, 0.0))), 'rad/s')
+        sigma = float(np.sqrt(max(j @ self.P @ j, 0.0))) * self.rate_sigma_scale
+        return Estimate(float(j @ self.x), sigma, 'rad/s')
 
     def wdot0(self) -> Estimate:
-        return Estimate(float(self.x[4]), float(np.sqrt(max(self.P[4, 4], 0.0))), 'rad/s^2')
+        sigma = float(np.sqrt(max(self.P[4, 4], 0.0))) * self.rate_sigma_scale
+        return Estimate(float(self.x[4]), sigma, 'rad/s^2')
 
 
 @dataclass
@@ -184,6 +192,12 @@ def combine(enc: FilterResult, gyro: FilterResult, period_s: float,
     ``converged`` is True when both amplitudes are determined to better than 1 % (1 sigma) and the
     bias to better than the rate amplitude: a rough "enough data" flag for live use.
     """
+    notes = list(notes or [])
+    if gyro.rate_sigma_scale > 1.0:
+        notes.append(f'gyro noise over {LONG_BLOCK_PERIODS:g}-period blocks is '
+                     f'{gyro.rate_sigma_scale:.2f}x the white level (bias instability / rate '
+                     'random walk): bias and drift sigmas scaled by that factor (still a lower '
+                     'bound for flicker noise)')
     a_e, a_g = enc.amplitude(), gyro.amplitude()
     a_g = Estimate(a_g.value / gyro_gain, a_g.sigma / gyro_gain, a_g.unit)
     rho = a_g.value / a_e.value - 1.0 if a_e.value > 0 else float('nan')
@@ -198,4 +212,4 @@ def combine(enc: FilterResult, gyro: FilterResult, period_s: float,
         scale_factor_error=sfe, bias=bias, bias_drift=_own(gyro.wdot0(), enc.wdot0(), sfe),
         amplitude_encoder=a_e, amplitude_gyro=a_g, period_s=float(period_s),
         samples_encoder=enc.samples, samples_gyro=gyro.samples, converged=converged,
-        noise_encoder_rad=enc.noise, noise_gyro_arw=gyro.noise, notes=list(notes or []))
+        noise_encoder_rad=enc.noise, noise_gyro_arw=gyro.noise, notes=notes)

@@ -16,8 +16,8 @@ TRUTH = {'A': 0.15, 'rho': 0.004, 'bias': 0.02, 'drift': 3e-5, 'enc_sigma': 2e-5
 
 
 def make_run(seed=0, duration=60.0, dt_g=0.002, dt_e=0.003, jitter=0.1, truth=TRUTH,
-             t0=1000.0, axis=0):
-    """Stand angle, encoder (white noise) and gyro rates (white noise) from the model."""
+             t0=1000.0, axis=0, rrw=0.0):
+    """Stand angle, encoder (white noise), gyro rates (white noise; + rate random walk)."""
     rng = np.random.default_rng(seed)
     w = 2 * np.pi / T
 
@@ -32,6 +32,8 @@ def make_run(seed=0, duration=60.0, dt_g=0.002, dt_e=0.003, jitter=0.1, truth=TR
     rate = ((1 + truth['rho']) * (truth['A'] * w * np.cos(w * (tg - t0) + psi) + stand_drift)
             + truth['bias'] + truth['drift'] * (tg - t0)
             + truth['arw'] / np.sqrt(dt_g) * rng.standard_normal(tg.size))
+    if rrw:
+        rate += rrw * np.sqrt(dt_g) * np.cumsum(rng.standard_normal(tg.size))
     chans = {f'gyro_{a}': 1e-3 * rng.standard_normal(tg.size) for a in 'xyz'}
     chans['gyro_' + 'xyz'[axis]] = rate
     imu = Recording(tg, chans, source='model')
@@ -119,6 +121,23 @@ def test_sigmas_from_covariance_are_calibrated():
     z = np.array(z)
     assert np.all(np.abs(z.mean(axis=0)) < 0.6), z.mean(axis=0)
     assert np.all((z.std(axis=0) > 0.7) & (z.std(axis=0) < 1.35)), z.std(axis=0)
+
+
+def test_low_frequency_noise_check_scales_bias_sigmas():
+    # White rate noise: the check finds the low-frequency level equal to the white one.
+    imu, enc = make_run(seed=8, duration=240.0, dt_g=0.004, dt_e=0.004)
+    white = estimate_swing(imu, enc, T)
+    assert white.gyro.low_frequency_ratio == pytest.approx(1.0, abs=0.4)
+    # A rate random walk (not in the filter's model) raises it; bias and drift sigmas follow,
+    # the scale-factor sigma (set at the swing frequency) hardly changes.
+    imu, enc = make_run(seed=8, duration=240.0, dt_g=0.004, dt_e=0.004, rrw=5e-5)
+    walk = estimate_swing(imu, enc, T)
+    k = walk.gyro.rate_sigma_scale
+    assert k > 2.0 and k == walk.gyro.low_frequency_ratio
+    assert walk.estimates.bias.sigma > 0.9 * k * white.estimates.bias.sigma
+    assert walk.estimates.scale_factor_error.sigma == pytest.approx(
+        white.estimates.scale_factor_error.sigma, rel=0.2)
+    assert any('bias and drift sigmas scaled' in n for n in walk.estimates.notes)
 
 
 def test_online_drops_and_counts_bad_samples():
