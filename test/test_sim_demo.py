@@ -37,10 +37,11 @@ def test_demo_live_nodes_over_loopback(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     monkeypatch.setenv('ROS_DOMAIN_ID', '56')
     out = tmp_path / 'live'
-    assert main(['demo', '--swing-duration', '20', '--static-duration', '60', '--live',
+    assert main(['demo', '--swing-duration', '20', '--no-static', '--live',
                  '--live-duration', '20', '--quiet', '--out', str(out)]) == 0
     text = capsys.readouterr().out
-    assert 'live node: 20 s replayed' in text, text
+    assert 'live node: 20 s replayed' in text and 'converged True' in text, text
+    assert 'Table 2.' not in text and not (out / 'static').exists()
     line = next(s for s in text.splitlines() if s.startswith('scale-factor error'))
     cells = line.split()
     # Same seed, same data: the live filter agrees with the offline one closely.
