@@ -25,6 +25,7 @@ _TABLE3_B = (15.23, 12.0)  # alpha = 1, d = 2: b0 + b1 ln m
 MIN_ACF_POINTS = 30
 # ... and more than this many add nothing but time (first points used).
 MAX_ACF_POINTS = 100_000
+MIN_PM_POINTS = 1000
 
 
 def _sw(t, alpha: int):
@@ -126,7 +127,7 @@ def alpha_from_acf(rate: np.ndarray, m: np.ndarray,
     and alpha = -2 (rho + d). Where the averaged series has fewer than 30 points the ACF cannot
     identify anything: there ``beyond`` (K, C) is used if given (e.g. ``alpha_from_slope`` of
     the curve), else the largest identifiable m's alpha is carried forward. At most the first
-    100 000 averages are used.
+    100 000 averages are used; alpha 1 or 2 needs at least 1000 (else capped at 0).
     """
     rate = np.asarray(rate, dtype=np.float64)
     rate2 = rate[:, None] if rate.ndim == 1 else rate
@@ -153,7 +154,9 @@ def alpha_from_acf(rate: np.ndarray, m: np.ndarray,
             if not todo.any():
                 break
             y = np.diff(y, axis=0)
-        out[k] = last = np.clip(alpha, -2, 2)
+        # Phase-noise types (alpha 1, 2) keep a near-constant, huge EDF at every m: claim
+        # them only with plenty of averages, not from a chance negative ACF of 30 points.
+        out[k] = last = np.clip(alpha, -2, 2 if n_avg >= MIN_PM_POINTS else 0)
     return out
 
 
@@ -203,10 +206,12 @@ def alpha_from_slope(tau: np.ndarray, avar: np.ndarray) -> np.ndarray:
     """
     Return alpha per (K, C) from the local log-log slope mu of sigma^2(tau).
 
-    sigma^2 ~ tau^mu with mu = -alpha - 1 for alpha in {0, -1, -2}; mu near -2 is white or
-    flicker phase noise, reported as alpha = 2 (quantization, the IEEE model's term). The
-    slope is taken over +-1 octave to damp the scatter; used where the samples are no longer
-    available (streaming) or as a cross-check of the ACF.
+    sigma^2 ~ tau^mu with mu = -alpha - 1 for alpha in {0, -1, -2}, rounded and clipped to that
+    range. Steeper slopes (white / flicker phase noise, alpha 2 / 1) are NOT returned: their EDF
+    hardly falls with m, so a chance steep stretch of a noisy long-tau curve would get absurd
+    (10^4) degrees of freedom; alpha = 0 is the conservative choice there. The slope is taken
+    over +-1 octave to damp the scatter; used where the samples are no longer available
+    (streaming) or where the ACF has too few averaged points (long tau).
     """
     tau = np.asarray(tau, dtype=np.float64)
     avar = np.asarray(avar, dtype=np.float64)
@@ -220,5 +225,5 @@ def alpha_from_slope(tau: np.ndarray, avar: np.ndarray) -> np.ndarray:
             sel = np.argsort(np.abs(lt - lt[k]))[:2]
         x = lt[sel] - lt[sel].mean()
         mu = (x @ (la[sel] - la[sel].mean(axis=0))) / max(x @ x, 1e-300)
-        out[k] = np.where(mu < -1.5, 2, np.clip(-np.round(mu) - 1, -2, 0))
+        out[k] = np.clip(-np.round(mu) - 1, -2, 0)
     return out if avar.ndim > 1 else out[:, 0]

@@ -75,7 +75,7 @@ def test_interval_and_noise_id_equal_allantools():
     rng = np.random.default_rng(5)
     for term, alpha in (('N', 0), ('B', -1), ('K', -2), ('Q', 2)):
         rate = generate(60_000, DT, rng=rng, **{term: 1.0})
-        m = np.array([1, 8, 64])
+        m = np.array([1, 8, 32])  # >= 1000 averages: alpha 2 may be claimed
         mine = alpha_from_acf(rate, m)[:, 0]
         ref = [aci.autocorr_noise_id(rate, int(mm), data_type='freq')[0] for mm in m]
         assert mine.tolist() == ref
