@@ -9,6 +9,7 @@ in a worker thread (it takes seconds; ingestion goes on meanwhile), then publish
 and, with ``output_dir`` set, writes the files of ``gyro-char allan``.
 """
 from collections import deque
+from dataclasses import replace
 import math
 import os
 import threading
@@ -227,17 +228,18 @@ class AllanNode(Node):
                            ('tau_index', None)])
 
     def fit(self, res) -> Dict[str, Any]:
-        """Fit every channel; a channel whose fit fails is reported, not fatal."""
-        from gyro_char.noise_fit import fit_noise
+        """Fit every channel (``noise_fit.fit_result``); a failing channel is reported."""
+        from gyro_char.noise_fit import fit_result
         fits, failed = {}, {}
-        tau_min = self.p['fit_tau_min_s'] or None
         for c, name in enumerate(res.channels):
+            one = replace(res, avar=res.avar[:, [c]], edf=res.edf[:, [c]],
+                          alpha=res.alpha[:, [c]], adev_lo=res.adev_lo[:, [c]],
+                          adev_hi=res.adev_hi[:, [c]], channels=(name,))
             try:
-                fits[name] = fit_noise(
-                    res.tau, res.avar[:, c], res.edf[:, c], res.alpha[:, c], channel=name,
-                    method=self.p['fit_method'], tau_min=tau_min,
-                    n_boot=self.p['fit_bootstrap'], rng=np.random.default_rng(c),
-                    avar_hi=res.adev_hi[:, c] ** 2)
+                # seed c: the same draws as fit_result on all channels at once.
+                fits[name] = fit_result(one, method=self.p['fit_method'],
+                                        tau_min=self.p['fit_tau_min_s'] or None,
+                                        n_boot=self.p['fit_bootstrap'], seed=c)[name]
             except (ValueError, ArithmeticError, IndexError) as exc:
                 failed[name] = str(exc)
         return {'fits': fits, 'failed': failed}
@@ -286,7 +288,7 @@ class AllanNode(Node):
                 status += f'; files written to {out}'
             elif out:
                 status += f'; files not written (failed: {", ".join(fitted["failed"])})'
-        except (OSError, ValueError, ArithmeticError, IndexError) as exc:
+        except Exception as exc:  # noqa: B902 - a worker thread must report, never vanish
             status = f'fit/output failed: {exc!r}'
             self.get_logger().error(status)
         self.fit_status = status
