@@ -1,7 +1,11 @@
 # End to end on the bench simulator (the paper's model): the swing estimates against the
 # simulator's truth, the CLI on a simulated bag-free CSV, and a small, fast version of the
 # Monte Carlo method-error study of bench/mc_swing.py.
+import json
+
 from gyro_char.bench_sim import simulate_swing
+from gyro_char.cli import main
+from gyro_char.recordings import write_bag
 from gyro_char.swing_kf import estimate_swing
 from gyro_char.swing_mc import monte_carlo, study_config
 from gyro_char.swing_online import SwingOnline
@@ -24,6 +28,21 @@ def test_estimates_match_simulator_truth(study):
     # The gyro noise level recovered from the residuals is the simulator's N.
     n_true = sim.truth['channels']['gyro_x']['N']
     assert e.noise_gyro_arw == pytest.approx(n_true, rel=0.1)
+
+
+def test_cli_on_simulated_bag(tmp_path):
+    cfg = study_config('fog')
+    sim = simulate_swing(cfg, duration=40.0, seed=11)
+    bag = tmp_path / 'bag'
+    write_bag(str(bag), sim.imu, sim.encoder)
+    out = tmp_path / 'out'
+    assert main(['swing', str(bag), '--period', '5', '--imu-topic', '/imu/data_raw',
+                 '--encoder-topic', '/stand/joint_states', '--out', str(out), '--quiet']) == 0
+    data = json.loads((out / 'swing.json').read_text())
+    tr = sim.truth['swing']
+    for key in ('scale_factor_error', 'bias', 'bias_drift'):
+        assert abs(data[key]['value'] - tr[key]) < 4.5 * data[key]['sigma'], key
+    assert (out / 'swing.png').exists()
 
 
 def test_online_on_simulator_streams_matches_offline():
