@@ -200,9 +200,10 @@ def table1(cfg, est: dict, truth: dict, realized: dict, live=None) -> list:
         if paper:
             line += f'   {paper[pcol]:+.2f} ({paper[pcol + 1]:.2f})'
         lines.append(line)
-    lines.append('truth: the simulator parameters; this run: plus the line through the '
-                 'flicker (B) and rate random walk (K) of this run, which the filter 1 sigma '
-                 '(white noise only) does not cover.')
+    lines.append('truth: the simulator parameters; this run: plus the least-squares line '
+                 'through the flicker (B) and rate random walk (K) of this very run - what an '
+                 'ideal estimator of the model of the paper would find; err/sigma is against '
+                 'it.')
     return lines
 
 
