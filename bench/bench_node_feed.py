@@ -92,11 +92,12 @@ def main(argv=None) -> int:
     burst = args.burst_ms * 1e-3
     t_end = max(t_imu[-1], t_enc[-1] if t_enc is not None else -math.inf)
     i = j = 0
-    start = time.monotonic()
     k = 0
     msg_imu = Imu()
     msg_enc = JointState()
     msg_enc.name = ['swing']
+    print('publishing', flush=True)
+    start = time.monotonic()
     while True:
         horizon = (k + 1) * burst
         while i < t_imu.size and t_imu[i] < horizon:
