@@ -162,3 +162,31 @@ def test_bad_parameter_exits_2(param, message):
     proc = subprocess.run(_node_cmd(param), env=_env(), capture_output=True, timeout=60)
     assert proc.returncode == 2
     assert message in proc.stdout + proc.stderr
+
+
+def test_repeat_continues_stamps_with_the_next_seed(context):
+    listener = rclpy.create_node('bench_sim_repeat_listener', context=context)
+    imu = []
+    listener.create_subscription(Imu, 'imu/data_raw', imu.append, DEEP)
+    node = BenchSimNode(context=context, parameter_overrides=[
+        Parameter('duration_s', value=0.3), Parameter('rate_factor', value=0.5),
+        Parameter('kind', value='static'), Parameter('repeat', value=True)])
+    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    executor.add_node(listener)
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline and node.run_index < 2:
+        executor.spin_once(timeout_sec=0.01)
+    runs = node.run_index
+    executor.shutdown()
+    node.destroy_node()
+    listener.destroy_node()
+    assert runs >= 2
+    stamps = np.array([_stamp(m) for m in imu])
+    assert np.all(np.diff(stamps) > 0)
+    # Run 1 (seed 1) follows run 0 (seed 0): its first samples are the core's seed-1 run,
+    # stamped after the last one of run 0.
+    first = simulate_static(load(), duration=0.3, seed=1).imu.channels['gyro_x'][:10]
+    values = np.array([m.angular_velocity.x for m in imu])
+    hits = [k for k in range(len(values) - 10) if np.array_equal(values[k:k + 10], first)]
+    assert len(hits) == 1 and hits[0] > 0
