@@ -185,7 +185,7 @@ def test_kill_9_and_resume_loses_at_most_one_checkpoint_period(tmp_path):
     node = _start_node(env, ck)
     feed = subprocess.Popen(
         [sys.executable, str(ROOT / 'bench' / 'bench_node_feed.py'), 'static', '--duration',
-         '60', '--speed', str(speed), '--seed', '11', '--summary', str(summary)],
+         '75', '--speed', str(speed), '--seed', '11', '--summary', str(summary)],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     second = None
     try:
@@ -216,6 +216,9 @@ def test_kill_9_and_resume_loses_at_most_one_checkpoint_period(tmp_path):
             second = _start_node(env, ck)
             assert spin_until(ex, lambda: (listener.values(INPUTS) or {}).get(
                 'resumed_samples') == saved_samples, 20.0), listener.last
+            assert spin_until(ex, lambda: listener.values(INPUTS)['samples']
+                              > saved_samples + 2 * rate * speed, 20.0), (
+                'the restarted node got no data before the feeder ended', listener.last)
             assert feed.wait(timeout=60) == 0
             sent = read_json(summary)['sent']['imu']
             # Wait until the count stops moving (the last messages are in).
