@@ -86,15 +86,16 @@ def _check_gaps(tau: np.ndarray, limit: float, what: str, why: str) -> None:
                          f'{limit:.3f} s): {why}')
 
 
-def _fit_amplitude(tau: np.ndarray, y: np.ndarray, period_s: float, poly: int) -> float:
-    """Amplitude at the swing period of y by least squares with a polynomial trend."""
+def _fit_amplitude(tau: np.ndarray, y: np.ndarray, period_s: float, poly: int):
+    """Amplitude at the swing period of y (least squares with a trend) and the residual rms."""
     step = max(1, tau.size // 50_000)
     tt, yy = tau[::step], y[::step]
     a = 2 * np.pi * tt / period_s
     s = tt / max(tt[-1], 1e-9)
     cols = [np.cos(a), np.sin(a)] + [s ** k for k in range(poly + 1)]
-    coef, *_ = np.linalg.lstsq(np.column_stack(cols), yy, rcond=None)
-    return float(np.hypot(coef[0], coef[1]))
+    a = np.column_stack(cols)
+    coef, *_ = np.linalg.lstsq(a, yy, rcond=None)
+    return float(np.hypot(coef[0], coef[1])), float(np.std(yy - a @ coef))
 
 
 def dominant_period(tau: np.ndarray, y: np.ndarray) -> float:
@@ -162,11 +163,13 @@ def align(imu: Recording, encoder: Optional[Recording], period_s: float,
     if abs(dom / period_s - 1.0) > PERIOD_TOLERANCE:
         notes.append(f'WARNING: the dominant period of the encoder angle is {dom:.4g} s but the '
                      f'given period is {period_s:g} s; the estimates assume the latter')
-    a_enc = _fit_amplitude(tau_e, z_e, period_s, poly=2)
+    a_enc, rms = _fit_amplitude(tau_e, z_e, period_s, poly=2)
+    if not a_enc > 3 * rms:
+        raise InputError(f'the encoder shows no swing at the {period_s:g} s period (amplitude '
+                         f'{a_enc:.3g} rad, residual rms {rms:.3g} rad; its dominant period is '
+                         f'{dom:.4g} s)')
     rate_amp = 2 * np.pi / period_s * a_enc
-    if a_enc <= 0:
-        raise InputError('the encoder shows no swing at the given period')
-    ratios = {c: _fit_amplitude(tau_g, imu.channels[c][mg], period_s, poly=0) / rate_amp
+    ratios = {c: _fit_amplitude(tau_g, imu.channels[c][mg], period_s, poly=0)[0] / rate_amp
               for c in present}
     best = max(ratios, key=ratios.get)
     if axis is None:

@@ -75,6 +75,12 @@ def test_wrong_axis(run):
     assert any('chosen automatically: gyro_x' in n for n in est.notes)
 
 
+def test_encoder_without_swing(run):
+    imu, enc = run
+    still = 1e-3 + 1e-5 * np.random.default_rng(0).standard_normal(len(enc))
+    _raises('the encoder shows no swing', imu, _with(enc, encoder=still))
+
+
 def test_too_short_and_bad_period(run):
     imu, enc = run
     _raises('record too short: 12.0. s .* 1.5 periods', imu, enc, period=8.0)
@@ -83,9 +89,11 @@ def test_too_short_and_bad_period(run):
 
 def test_period_disagreement_warns(run):
     imu, enc = run
-    est = estimate_swing(imu, enc, 2.3).estimates
+    est = estimate_swing(imu, enc, 1.03 * T).estimates
     assert any('WARNING: the dominant period of the encoder angle is 2' in n for n in est.notes)
     assert not any('WARNING' in n for n in estimate_swing(imu, enc, T).estimates.notes)
+    # Far off, the model cannot follow the swing at all: refused, with the period it has.
+    _raises('no swing at the 2.6 s period .* dominant period is 2', imu, enc, period=2.6)
 
 
 def _write_csv(path, imu, enc):
