@@ -14,8 +14,9 @@ then effects, the sensor's own processing, decimation to the output rate and out
 quantization dH. The paper's white in-run bias instability ddw0H (one Gaussian draw per sample)
 is the IEEE white term N of ``noise``: sigma = N / sqrt(dt) at the sensor's internal rate.
 The paper's formula has no scale-factor error (only cos dtheta); a real gyro has one
-(``gyro.scale_factor_error``). ``truth.swing.scale_factor_error`` is what the method measures: (1 + drho) cos(dtheta) exp(-sigma_ddtheta^2 / 2) - 1 (the last factor is E[cos] of
-the white misalignment instability). Static records use ``gyro.bias`` and the IEEE terms only:
+(``gyro.scale_factor_error``). ``truth.swing.scale_factor_error`` is what the method measures:
+(1 + drho) cos(dtheta) exp(-sigma_ddtheta^2 / 2) - 1 (the last factor is E[cos] of the white
+misalignment instability). Static records use ``gyro.bias`` and the IEEE terms only:
 ``gyro.bias_drift`` is the swing-run drift (the paper's Table 1), a static ramp is the term R.
 
 Truth N includes the output quantization's white contribution dH^2 dt / 12 (added in
