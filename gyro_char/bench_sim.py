@@ -37,6 +37,11 @@ from gyro_char.sim_config import AXES, BenchConfig, load
 import numpy as np
 
 
+# A run holds ~25 float64 arrays of its length at peak (chain + FFT of the 1/f generator):
+# 2e7 samples is ~4 GB, the most a run may take on a desktop.
+MAX_SAMPLES = 20_000_000
+
+
 @dataclass
 class SimRun:
     """One simulated run: IMU stream, encoder stream (swing only) and the truth dict."""
@@ -69,6 +74,10 @@ def _check_run(duration: float, seed: int, rate: float) -> int:
     n = int(round(duration * rate))
     if n < 2:
         raise InputError(f'duration {duration} s gives fewer than 2 samples at {rate} Hz')
+    if n > MAX_SAMPLES:
+        raise InputError(f'{duration:g} s at {rate:g} Hz is {n} samples, more than one '
+                         f'in-memory run holds ({MAX_SAMPLES}, ~200 bytes each); simulate '
+                         'shorter runs')
     return n
 
 

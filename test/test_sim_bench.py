@@ -82,7 +82,8 @@ def test_bad_config_is_refused(tmp_path, text, message):
 
 
 @pytest.mark.parametrize('kw', [{'duration': 0.0}, {'duration': float('nan')},
-                                {'seed': -1}, {'seed': 1.5}, {'duration': 1e-4}])
+                                {'seed': -1}, {'seed': 1.5}, {'duration': 1e-4},
+                                {'duration': 1e6}])
 def test_bad_run_arguments(kw):
     args = {'duration': 1.0, 'seed': 0, **kw}
     with pytest.raises(InputError):
