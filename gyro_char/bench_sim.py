@@ -167,6 +167,9 @@ def _imu_chain(cfg: BenchConfig, ctx: SimContext, fx: Sequence[Effect], n: int,
     d = ctx.oversample
     dti = ctx.dt_internal
     ni = n * d
+    if ni > MAX_SAMPLES:
+        raise InputError(f'{n} output samples x {d} internal samples each is more than one '
+                         f'in-memory run holds ({MAX_SAMPLES}); simulate shorter runs')
     g = cfg.gyro
     t = sample_times(ni, dti, g.jitter_s, ctx.rng('jitter:gyro'))
     ctx.t = t
