@@ -196,12 +196,12 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'rate_random_walk': EffectSpace('rate_random_walk', [
             Param('K', 0.1 * k_long, 30.0 * k_long)]),
         'gauss_markov': EffectSpace('gauss_markov', [
-            Param('sigma', 0.1 * sig_long, 30.0 * sig_long),
+            Param('sigma', 0.1 * sig_long, 2.0 * sig_sample),
             Param('tau_s', 3 * dt, length / 4)]),
         'quantization': EffectSpace('quantization', [
             Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt))]),
         'temperature_drift': EffectSpace('temperature_drift', [
-            Param('amplitude', 0.3 * sig_long, 100.0 * sig_long, sign=warm_sign),
+            Param('amplitude', 0.3 * sig_long, 3.0 * sig_sample, sign=warm_sign),
             Param('tau_s', length / 200, length / 2)]),
         'vibration': EffectSpace('vibration', [
             Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample),
