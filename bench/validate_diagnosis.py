@@ -92,8 +92,8 @@ def white_angle(x, rng, step):
 # name -> (generator, [magnitude parameter sets, weaker first])
 SHAPES = {
     'internal_lowpass': (hann_lowpass, [{'length': 3}, {'length': 5}]),
-    'vibration': (am_tone, [{'amplitude': 0.08 * SIG, 'freq': 13.3},
-                            {'amplitude': 0.25 * SIG, 'freq': 31.7}]),
+    'vibration': (am_tone, [{'amplitude': 0.15 * SIG, 'freq': 13.3},
+                            {'amplitude': 0.3 * SIG, 'freq': 31.7}]),
     'temperature_drift': (hyperbolic_warmup, [{'amplitude': 3e-3, 'tau': 20.0},
                                               {'amplitude': 1e-2, 'tau': 30.0}]),
     'bias_instability': (gm_sum_flicker, [{'b': 1e-3}, {'b': 3e-3}]),
@@ -102,8 +102,11 @@ SHAPES = {
     'quantization': (white_angle, [{'step': 4 * N_ARW * np.sqrt(DT)},
                                    {'step': 8 * N_ARW * np.sqrt(DT)}]),
 }
-PAIRS = [('vibration', 'internal_lowpass'), ('temperature_drift', 'internal_lowpass'),
-         ('vibration', 'bias_instability')]
+# (effect, magnitude level) pairs; the tone goes through the smoothing filter, so the pair
+# with internal_lowpass uses the lower-frequency tone (the 31.7 Hz one would be filtered away).
+PAIRS = [(('vibration', 0), ('internal_lowpass', 0)),
+         (('temperature_drift', 1), ('internal_lowpass', 0)),
+         (('vibration', 1), ('bias_instability', 1))]
 
 
 def make_record(effects, n, seed):
@@ -136,7 +139,7 @@ def cases(quick: bool, seeds):
                 yield name, [(name, level)], s
     for a, b in PAIRS:
         for s in seeds:
-            yield f'{a}+{b}', [(a, 1), (b, 1)], s
+            yield f'{a[0]}+{b[0]}', [a, b], s
 
 
 def main(argv=None) -> int:
