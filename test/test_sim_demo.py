@@ -1,22 +1,30 @@
 """``gyro-char demo`` end to end on short runs (offline path, and the live nodes over DDS)."""
+import importlib.util
 import json
-import os
+import math
 
 from gyro_char.cli import main
 import pytest
 
 
-def test_demo_offline_tables_beside_truth(tmp_path, capsys):
+def test_demo_tables_offline_and_live(tmp_path, capsys, monkeypatch):
+    # One run of the whole demo (short records): offline commands on the bags, and the live
+    # nodes over DDS on loopback (own domain id), to keep the suite fast.
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', '56')
+    live = importlib.util.find_spec('rclpy') is not None
     out = tmp_path / 'demo'
-    assert main(['demo', '--swing-duration', '40', '--static-duration', '200', '--seed', '3',
-                 '--quiet', '--out', str(out)]) == 0
+    argv = ['demo', '--swing-duration', '40', '--static-duration', '120', '--seed', '3',
+            '--quiet', '--out', str(out)]
+    if live:
+        argv += ['--live', '--live-duration', '20', '--live-static-duration', '30']
+    assert main(argv) == 0
     text = capsys.readouterr().out
     assert 'Table 1.' in text and 'Table 2.' in text
     truth = json.loads((out / 'swing' / 'truth.json').read_text())
     est = json.loads((out / 'swing' / 'swing.json').read_text())
     # The printed truth is the simulator's; the estimate is the swing command's own output.
-    line = next(s for s in text.splitlines() if s.startswith('scale-factor error'))
-    cells = line.split()
+    cells = next(s for s in text.splitlines() if s.startswith('scale-factor error')).split()
     assert float(cells[3]) == pytest.approx(est['scale_factor_error']['value'] * 100, abs=1e-4)
     assert float(cells[5]) == pytest.approx(truth['swing']['scale_factor_error'] * 100,
                                             abs=1e-4)
@@ -24,29 +32,25 @@ def test_demo_offline_tables_beside_truth(tmp_path, capsys):
     z = (est['scale_factor_error']['value'] - truth['swing']['scale_factor_error']) \
         / est['scale_factor_error']['sigma']
     assert abs(z) < 4
-    assert (out / 'swing' / 'swing.png').is_file()
-    assert (out / 'static' / 'recording.mcap').is_file()
-    if (out / 'static' / 'noise.json').is_file():
-        noise = json.loads((out / 'static' / 'noise.json').read_text())
-        assert 'gyro_x' in noise['channels']
+    for name in ('swing/swing.png', 'static/recording.mcap', 'static/noise.json',
+                 'static/allan_truth.png', 'demo.log'):
+        assert (out / name).is_file(), name
+    static_truth = json.loads((out / 'static' / 'truth.json').read_text())
+    truth_n = static_truth['channels']['gyro_x']['N'] * 180 / math.pi * 60
+    noise = json.loads((out / 'static' / 'noise.json').read_text())
+    assert noise['channels']['gyro_x']['N']['value'] * 180 / math.pi * 60 == pytest.approx(
+        truth_n, rel=0.05)
     assert (out / 'demo.txt').read_text().strip() in text
-
-
-def test_demo_live_nodes_over_loopback(tmp_path, capsys, monkeypatch):
-    pytest.importorskip('rclpy')
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', '56')
-    out = tmp_path / 'live'
-    assert main(['demo', '--swing-duration', '20', '--no-static', '--live',
-                 '--live-duration', '20', '--quiet', '--out', str(out)]) == 0
-    text = capsys.readouterr().out
+    if not live:
+        return
     assert 'live node: 20 s replayed' in text and 'converged True' in text, text
-    assert 'Table 2.' not in text and not (out / 'static').exists()
-    line = next(s for s in text.splitlines() if s.startswith('scale-factor error'))
-    cells = line.split()
-    # Same seed, same data: the live filter agrees with the offline one closely.
-    assert float(cells[8]) == pytest.approx(float(cells[3]), abs=0.5 * float(cells[4]))
-    assert os.path.getsize(out / 'demo.log') > 0
+    # The live filter saw (most of) the same samples: it agrees with the offline one within
+    # the filter's sigma scale (best-effort transport may drop some under load).
+    assert float(cells[8]) == pytest.approx(float(cells[3]), abs=2.0 * float(cells[4]))
+    # allan_node on a 30 s replay of the static bench: N within 15 % of the truth.
+    assert 'live allan_node: 30 s' in text, text
+    tokens = next(s for s in text.splitlines() if s.startswith('gyro_x ')).split()
+    assert float(tokens[tokens.index('/') - 1]) == pytest.approx(truth_n, rel=0.15)
 
 
 def test_allan_vs_truth_plot(tmp_path):

@@ -48,7 +48,9 @@ def register(subparsers) -> None:
     p.add_argument('--live', action='store_true',
                    help='also run bench_sim_node -> swing_kf_node on a loopback ROS graph')
     p.add_argument('--live-duration', type=float, default=120.0, metavar='S',
-                   help='simulated seconds replayed through the live nodes')
+                   help='simulated swing seconds replayed through swing_kf_node')
+    p.add_argument('--live-static-duration', type=float, default=300.0, metavar='S',
+                   help='simulated static seconds replayed through allan_node (at 5x)')
     add_common(p, default_out='out/demo')
     p.set_defaults(func=run)
 
@@ -96,9 +98,11 @@ def run(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     have_allan = _has_command('allan') and not args.no_static
-    steps = _Steps(3 + int(not args.no_static) + int(have_allan) + int(args.live), args.quiet)
+    live_static = args.live and not args.no_static
+    steps = _Steps(3 + int(not args.no_static) + int(have_allan) + int(args.live)
+                   + int(live_static), args.quiet)
     missing = []
-    static = noise = live = None
+    static = noise = live = live_noise = None
     with open(out / 'demo.log', 'w', encoding='utf-8') as log:
         swing, estimates = _swing_part(cfg, args, effects, out, steps, log)
         if not args.no_static:
@@ -112,10 +116,19 @@ def run(args) -> int:
                             config_file=args.config)
             if live.get('missing'):
                 missing.append(live['missing'])
+        if live_static:
+            steps(f'live: bench_sim_node -> allan_node, {args.live_static_duration:g} s '
+                  'static at 5x real time, then ~/compute')
+            from gyro_char.commands.demo_live import run_live_static
+            live_noise = run_live_static(cfg, args.seed + 1, args.live_static_duration,
+                                         args.effect, log, config_file=args.config)
+            if live_noise.get('missing'):
+                missing.append(live_noise['missing'])
+                live_noise = None
         steps('tables')
     text = table1(cfg, estimates, swing.truth, swing.realized, live)
     if static is not None:
-        text += [''] + table2(cfg, noise, static.truth)
+        text += [''] + table2(cfg, noise, static.truth, live_noise)
     if effects:
         text += ['', 'effects added to both runs: '
                  + ', '.join(f'{e.name} {e.params}' for e in effects)]
@@ -124,6 +137,10 @@ def run(args) -> int:
                     f'(seed {args.seed}); the filter used {live["samples_gyro"]} gyro + '
                     f'{live["samples_encoder"]} encoder samples (best effort), converged '
                     f'{bool(live["converged"])}')
+    if live_noise:
+        text.append(f'live allan_node: {args.live_static_duration:g} s static record replayed '
+                    f'at 5x real time (seed {args.seed + 1}, a shorter record than the offline '
+                    f'one, so B is poorly resolved); {live_noise["message"]}')
     text += [f'missing: {item}' for item in missing]
     plots = sorted(str(p) for p in out.glob('*/*.png'))
     text += ['', f'written in {out}: swing/ and static/ (recording.mcap, truth.json, '
@@ -207,14 +224,15 @@ def table1(cfg, est: dict, truth: dict, realized: dict, live=None) -> list:
     return lines
 
 
-def table2(cfg, noise, truth: dict) -> list:
+def table2(cfg, noise, truth: dict, live=None) -> list:
     """Paper's Table 2 layout: N deg/sqrt(h) and B deg/h per gyro axis beside the truth."""
     arw, dph = 60.0 / DEG, 3600.0 / DEG
     paper = PAPER_TABLE2.get(cfg.preset, {})
     lines = [f'Table 2. Allan-variance noise terms, {cfg.preset}, static record, seed '
              f'{truth["seed"]}',
              f'{"":8s}{"N est":>9s}{"68% interval":>18s}{"N truth":>9s}{"B est":>9s}'
-             f'{"68% interval":>18s}{"B truth":>9s}   paper N / B (mean)']
+             f'{"68% interval":>18s}{"B truth":>9s}' + ('  live N / B' if live else '')
+             + '   paper N / B (mean)']
     for ch in GYRO_CHANNELS:
         tr = truth['channels'].get(ch)
         if tr is None:
@@ -226,13 +244,30 @@ def table2(cfg, noise, truth: dict) -> list:
                 cells += ['-', '-']
                 continue
             ci = item.get('ci68')
-            flag = '' if item.get('resolved', True) else ' (bound)'
-            cells += [f'{item["value"] * scale:.3f}{flag}',
+            flag = '' if item.get('resolved', True) else '<'
+            cells += [f'{flag}{item["value"] * scale:.3f}',
                       f'[{ci[0] * scale:.3f}, {ci[1] * scale:.3f}]' if ci else '-']
         p = paper.get(ch)
         ptxt = f'{p[0]:.3f} / {p[2]:.2f}' if p and p[2] is not None else (
             f'{p[0]:.3f} / -' if p else '-')
-        lines.append(f'{ch:8s}{cells[0]:>9s}{cells[1]:>18s}{tr["N"] * arw:9.3f}{cells[2]:>9s}'
-                     f'{cells[3]:>18s}{tr["B"] * dph:9.2f}   {ptxt}')
-    lines.append('N in deg/sqrt(h), B in deg/h (IEEE coefficient: the Allan floor is 0.664 B).')
+        line = (f'{ch:8s}{cells[0]:>9s}{cells[1]:>18s}{tr["N"] * arw:9.3f}{cells[2]:>9s}'
+                f'{cells[3]:>18s}{tr["B"] * dph:9.2f}')
+        if live:
+            line += f'  {_live_terms(live, ch, arw, dph):>11s}'
+        lines.append(line + f'   {ptxt}')
+    lines.append('N in deg/sqrt(h), B in deg/h (IEEE coefficient: the Allan floor is 0.664 B); '
+                 '<x: not resolved by the record, x is an upper bound.')
     return lines
+
+
+def _live_terms(live: dict, ch: str, arw: float, dph: float) -> str:
+    values = live.get('channels', {}).get(ch, {})
+    out = []
+    for key, scale in (('N_rad_sqrt_s', arw), ('B_rad_s', dph)):
+        term = key[0]
+        if key not in values:
+            out.append('-')
+            continue
+        text = f'{values[key] * scale:.3g}'
+        out.append(text if values.get(f'{term}_resolved', 1) else '<' + text)
+    return ' / '.join(out)
