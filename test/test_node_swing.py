@@ -80,9 +80,9 @@ def test_estimates_match_truth_in_process(sim):
         assert v['amplitude_encoder_rad'] == pytest.approx(truth['amplitude'], rel=1e-3)
         assert v['period_s'] == truth['period_s']
         # Input health: nothing dropped, both rates measured, streams aligned in time.
-        listener.last.pop(INPUTS, None)
         node.publish_diagnostics()
-        assert spin_until(ex, lambda: INPUTS in listener.last, 3.0)
+        assert spin_until(ex, lambda: (listener.values(INPUTS) or {}).get('imu_accepted')
+                          == n_imu, 3.0)
         h = listener.values(INPUTS)
         assert h['imu_accepted'] == n_imu and h['encoder_accepted'] == n_enc
         assert h['imu_rate_hz'] == pytest.approx(1000.0, rel=0.01)
@@ -124,7 +124,9 @@ def test_bad_input_is_counted_never_fatal():
                           and node.enc_health.received == 301, 5.0)
         node.process()
         node.publish_diagnostics()
-        assert spin_until(ex, lambda: INPUTS in listener.last, 3.0)
+        assert spin_until(ex, lambda: (listener.values(INPUTS) or {}).get(
+            'imu_dropped_non_finite') == 5 and listener.values(INPUTS)['imu_received'] == total,
+            3.0), listener.last
         level, message, h = listener.last[INPUTS]
         assert h['imu_dropped_non_finite'] == 5
         assert h['imu_dropped_zero_stamp'] == 3
@@ -167,7 +169,8 @@ def test_streams_drifting_apart_warn():
                 spin_until(ex, lambda: node.enc_health.received > k, 5.0)
                 node.process()
         node.publish_diagnostics()
-        assert spin_until(ex, lambda: INPUTS in listener.last, 3.0)
+        assert spin_until(ex, lambda: (listener.values(INPUTS) or {}).get('encoder_received')
+                          == 400, 3.0)
         level, message, h = listener.last[INPUTS]
         assert h['stream_skew_s'] == pytest.approx(0.3, abs=0.05)
         assert level == 1 and 'apart in time' in message
