@@ -12,8 +12,8 @@ t = 5000 s, which must be found.
 from pathlib import Path
 import sys
 
-from gyro_char.recordings import IMU_CHANNELS, read_imu
 from gyro_char.motion_detect import MotionDetector
+from gyro_char.recordings import IMU_CHANNELS, read_imu
 import numpy as np
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'adis16405'
