@@ -157,9 +157,15 @@ def test_flood_is_capped_and_reported():
         assert spin_until(ex, lambda: node.imu_health.received == 600, 5.0)
         # At most 200 pass per wall-clock second window the burst touched.
         windows = int(time.time() - start) + 2
-        assert node.imu_health.accepted <= 200 * windows < 600
-        assert node.imu_health.flood_dropped >= 600 - 200 * windows
+        assert node.imu_health.accepted <= min(200 * windows, 600)
         assert node.imu_health.accepted + node.imu_health.flood_dropped == 600
+        assert node.imu_health.flood_dropped >= 600 - 200 * windows
+        node.publish_diagnostics()
+        assert spin_until(ex, lambda: (listener.values(INPUTS) or {}).get('imu_received')
+                          == 600, 3.0)
+        level, message, h = listener.last[INPUTS]
+        assert h['imu_dropped_flood'] == node.imu_health.flood_dropped > 0
+        assert 'floods' in message
         node.destroy_node()
 
 
