@@ -251,3 +251,10 @@ def test_kill_9_and_resume_loses_at_most_one_checkpoint_period(tmp_path):
             if proc is not None:
                 stop(proc)
     assert second.returncode == 0
+
+
+def test_invalid_startup_parameter_exits_2_with_the_reason():
+    proc = subprocess.run(node_command('allan_node') + ['--ros-args', '-p', 'fit_method:=ols'],
+                          env=ros_env(DOMAIN_PROCESS), capture_output=True, timeout=60)
+    assert proc.returncode == 2
+    assert b'fit_method must be one of' in proc.stdout
