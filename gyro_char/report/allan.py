@@ -2,7 +2,7 @@
 ``allan.png`` and the human table of the noise terms (deg/sqrt(h), deg/h, ...).
 
 One log-log panel per sensor kind (gyro, accel): sigma(tau) of each channel with its 68 % band,
-the fitted total of formula (4) and each fitted term's straight line.
+the fitted total of formula (4) and each resolved term's straight line, over the fitted taus.
 """
 from typing import Dict, List
 
@@ -34,11 +34,11 @@ def plot_allan(res: AllanResult, fits: Dict[str, NoiseFit], path: str, title: st
             if fit is None:
                 continue
             coeffs = fit.coeffs()
-            ax.loglog(res.tau, np.sqrt(model_avar(res.tau, coeffs)), color=color, lw=1,
-                      alpha=0.9)
+            tau = fit.tau  # only over the fitted range (see --tau-min)
+            ax.loglog(tau, np.sqrt(model_avar(tau, coeffs)), color=color, lw=1, alpha=0.9)
             for term in TERMS:
                 if coeffs[term] > 0 and fit.terms[term].resolved:
-                    ax.loglog(res.tau, np.sqrt(model_avar(res.tau, {term: coeffs[term]})),
+                    ax.loglog(tau, np.sqrt(model_avar(tau, {term: coeffs[term]})),
                               color=color, lw=0.8, ls=TERM_STYLE[term], alpha=0.8)
         top = np.nanmax(res.adev_hi if res.adev_hi is not None else res.adev)
         low = np.nanmin(res.adev_lo if res.adev_lo is not None else res.adev)
