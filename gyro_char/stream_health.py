@@ -100,7 +100,9 @@ class StreamHealth:
             self._backwards_run += 1
             if self._backwards_run < self.restart_after:
                 return DROP
-            # Consistently behind for restart_after messages: the source restarted.
+            # Consistently behind for restart_after messages: the source restarted. This one
+            # is accepted, so it is not a dropped backwards stamp.
+            self.backwards -= 1
             self.restarts += 1
             self._backwards_run = 0
             self.last_stamp = stamp

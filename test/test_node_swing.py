@@ -169,6 +169,24 @@ def test_flood_is_capped_and_reported():
         node.destroy_node()
 
 
+def test_stamp_restart_restarts_the_filter():
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context)
+        for base, n, total in ((EPOCH + 100.0, 300, 300), (EPOCH, 400, 700)):
+            for k in range(n):  # the second run: the source restarted its clock
+                feeder.imu_sample(base + k * 1e-3, (0.1, 0.0, 0.0))
+                feeder.encoder_sample(base + k * 1e-3, 0.001 * k)
+            assert spin_until(ex, lambda: node.enc_health.received == total
+                              and node.imu_health.received == total, 5.0)
+            node.process()
+        assert node.core_restarts == 1  # the encoder's restart lands on the new clock
+        assert node.imu_health.restarts == 1 and node.imu_health.backwards == 199
+        # The filter holds only the samples after the restart.
+        est = node.core.estimates()
+        assert est.samples_gyro == est.samples_encoder == 400 - 199
+        node.destroy_node()
+
+
 def test_streams_drifting_apart_warn():
     with ros_context(DOMAIN_IN_PROCESS) as context:
         node, peer, listener, feeder, ex = _graph(context, max_skew_s=0.05)

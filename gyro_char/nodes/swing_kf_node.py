@@ -124,8 +124,9 @@ class SwingKfNode(Node):
             self._publish_timer = self.create_timer(1.0 / self.p['publish_rate_hz'],
                                                     self.publish_estimates)
 
-    def _restart_core(self, why: str) -> None:
-        self.process()
+    def _restart_core(self, why: str, drain: bool = True) -> None:
+        if drain:  # feed what arrived under the old setting first
+            self.process()
         self._configure()
         self.core_restarts += 1
         self.get_logger().info(f'filter restarted ({why})')
@@ -180,10 +181,13 @@ class SwingKfNode(Node):
             items = [q.popleft() for _ in range(n)]
             runs = split_at_markers(items)
             for i, run in enumerate(runs):
-                if i > 0:
-                    self._restart_core(f'{health.name} stamps restarted')
                 if not run:
                     continue
+                t_ref = self.core.t_ref
+                # A restarted source: restart the filter unless it already restarted on the
+                # new clock (the other stream's restart came first).
+                if i > 0 and (t_ref is None or run[0][0] < t_ref - 1.0):
+                    self._restart_core(f'{health.name} stamps restarted', drain=False)
                 arr = np.array(run, dtype=np.float64)
                 finite = np.isfinite(arr[:, 2])
                 health.count_non_finite(arr.shape[0] - int(finite.sum()))
