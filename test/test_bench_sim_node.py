@@ -156,7 +156,6 @@ def test_separate_process_static_run_over_loopback(monkeypatch):
 
 @pytest.mark.parametrize('param,message', [
     ('kind:=moving', b'kind must be swing or static'),
-    ("effects:=['warp_drive']", b'unknown effect'),
 ])
 def test_bad_parameter_exits_2(param, message):
     proc = subprocess.run(_node_cmd(param), env=_env(), capture_output=True, timeout=60)
@@ -190,3 +189,10 @@ def test_repeat_continues_stamps_with_the_next_seed(context):
     values = np.array([m.angular_velocity.x for m in imu])
     hits = [k for k in range(len(values) - 10) if np.array_equal(values[k:k + 10], first)]
     assert len(hits) == 1 and hits[0] > 0
+
+
+def test_unknown_effect_is_refused_in_process(context):
+    from gyro_char.recordings import InputError
+    with pytest.raises(InputError, match='unknown effect'):
+        BenchSimNode(context=context, parameter_overrides=[
+            Parameter('effects', value=['warp_drive'])])
