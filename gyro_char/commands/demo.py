@@ -210,10 +210,10 @@ def table1(cfg, est: dict, truth: dict, realized: dict, live=None) -> list:
         value, sigma = e['value'] * scale, e['sigma'] * scale
         true, this = t[key] * scale, run[key] * scale
         z = (value - this) / sigma if sigma else float('nan')
-        line = f'{label:26s}{value:10.4f}{sigma:9.4f}{true:10.4f}{this:10.4f}{z:10.1f}'
+        line = f'{label:26s}{value:10.5g}{sigma:9.2g}{true:10.5g}{this:10.5g}{z:10.1f}'
         if live:
             lv = live.get(key)
-            line += f'{lv * scale:11.4f}' if lv is not None else f'{"-":>11s}'
+            line += f'{lv * scale:11.5g}' if lv is not None else f'{"-":>11s}'
         if paper:
             line += f'   {paper[pcol]:+.2f} ({paper[pcol + 1]:.2f})'
         lines.append(line)
