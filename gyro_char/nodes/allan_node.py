@@ -24,6 +24,7 @@ from gyro_char.nodes.node_common import (
     split_at_markers, validate)
 from gyro_char.recordings import IMU_CHANNELS, InputError
 from gyro_char.stream_health import DROP, RESTART, StreamHealth
+from msg_adapters import imu_sample
 from msg_adapters.diagnostics import (
     diagnostic_array, diagnostic_status, ERROR, multiarray, OK, WARN)
 import numpy as np
@@ -164,15 +165,13 @@ class AllanNode(Node):
     # -- per message: O(1) ---------------------------------------------------------------------
 
     def _on_imu(self, msg: Imu) -> None:
-        st = msg.header.stamp
-        t = st.sec + st.nanosec * 1e-9
+        t, values = imu_sample(msg)
         code = self.health.admit(t, time.time(), msg.header.frame_id)
         if code == DROP:
             return
         if code == RESTART:
             self._q.append(None)
-        w, a = msg.angular_velocity, msg.linear_acceleration
-        self._q.append((t, w.x, w.y, w.z, a.x, a.y, a.z))
+        self._q.append((t, *values))
 
     # -- per chunk -----------------------------------------------------------------------------
 

@@ -17,6 +17,7 @@ from gyro_char.nodes.node_common import (
 from gyro_char.stream_health import DROP, RESTART, stream_skew_s, StreamHealth
 from gyro_char.swing_model import SwingNoise
 from gyro_char.swing_online import SwingOnline
+from msg_adapters import joint_angle, stamp_seconds
 from msg_adapters.diagnostics import diagnostic_array, diagnostic_status, ERROR, OK, WARN
 import numpy as np
 import rclpy
@@ -134,8 +135,7 @@ class SwingKfNode(Node):
     # -- per message: O(1) ---------------------------------------------------------------------
 
     def _on_imu(self, msg: Imu) -> None:
-        st = msg.header.stamp
-        t = st.sec + st.nanosec * 1e-9
+        t = stamp_seconds(msg.header.stamp)
         now = time.time()
         code = self.imu_health.admit(t, now, msg.header.frame_id)
         if code == DROP:
@@ -145,15 +145,11 @@ class SwingKfNode(Node):
         self._imu_q.append((t, now, getattr(msg.angular_velocity, self._axis)))
 
     def _on_encoder(self, msg: JointState) -> None:
-        st = msg.header.stamp
-        t = st.sec + st.nanosec * 1e-9
-        joint = self._joint
-        try:
-            index = msg.name.index(joint) if isinstance(joint, str) else joint
-            angle = msg.position[index]
-        except (ValueError, IndexError):
+        sample = joint_angle(msg, self._joint)
+        if sample is None:
             self.missing_joint += 1
             return
+        t, angle = sample
         now = time.time()
         code = self.enc_health.admit(t, now)
         if code == DROP:
