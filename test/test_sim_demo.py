@@ -14,10 +14,11 @@ def test_demo_tables_offline_and_live(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv('ROS_DOMAIN_ID', '56')
     live = importlib.util.find_spec('rclpy') is not None
     out = tmp_path / 'demo'
-    argv = ['demo', '--swing-duration', '30', '--static-duration', '90', '--seed', '3',
+    argv = ['demo', '--swing-duration', '20', '--static-duration', '90', '--seed', '3',
             '--quiet', '--out', str(out)]
     if live:
-        argv += ['--live', '--live-duration', '20', '--live-static-duration', '20']
+        argv += ['--live', '--live-duration', '20', '--live-rate-factor', '2',
+                 '--live-static-duration', '20']
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert 'Table 1.' in text and 'Table 2.' in text
@@ -28,7 +29,7 @@ def test_demo_tables_offline_and_live(tmp_path, capsys, monkeypatch):
     assert float(cells[3]) == pytest.approx(est['scale_factor_error']['value'] * 100, abs=1e-4)
     assert float(cells[5]) == pytest.approx(truth['swing']['scale_factor_error'] * 100,
                                             abs=1e-4)
-    # 30 s at 1 kHz still pins the scale-factor error within a few filter sigmas.
+    # 20 s at 1 kHz still pins the scale-factor error within a few filter sigmas.
     z = (est['scale_factor_error']['value'] - truth['swing']['scale_factor_error']) \
         / est['scale_factor_error']['sigma']
     assert abs(z) < 4
@@ -44,9 +45,11 @@ def test_demo_tables_offline_and_live(tmp_path, capsys, monkeypatch):
     if not live:
         return
     assert 'live node: 20 s replayed' in text and 'converged True' in text, text
-    # The live filter saw (most of) the same samples: it agrees with the offline one within
-    # the filter's sigma scale (best-effort transport may drop some under load).
-    assert float(cells[8]) == pytest.approx(float(cells[3]), abs=2.0 * float(cells[4]))
+    # When the live filter saw the samples (no loss warning), it agrees with the offline one
+    # on the same run (same seed and length); lost samples (best effort, machine overloaded)
+    # are reported instead.
+    if 'samples were lost' not in text:
+        assert float(cells[8]) == pytest.approx(float(cells[3]), abs=2.0 * float(cells[4]))
     # allan_node on a 20 s replay of the static bench: N within 15 % of the truth.
     assert 'live allan_node: 20 s' in text, text
     tokens = next(s for s in text.splitlines() if s.startswith('gyro_x ')).split()

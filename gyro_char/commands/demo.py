@@ -47,8 +47,11 @@ def register(subparsers) -> None:
                    help='add an unmodelled effect to both simulated runs')
     p.add_argument('--live', action='store_true',
                    help='also run bench_sim_node -> swing_kf_node on a loopback ROS graph')
-    p.add_argument('--live-duration', type=float, default=120.0, metavar='S',
+    p.add_argument('--live-duration', type=float, default=60.0, metavar='S',
                    help='simulated swing seconds replayed through swing_kf_node')
+    p.add_argument('--live-rate-factor', type=float, default=1.0, metavar='X',
+                   help='swing replay speed (1 = real time, the rate the nodes are built '
+                        'for; faster replays may drop samples on a loaded machine)')
     p.add_argument('--live-static-duration', type=float, default=300.0, metavar='S',
                    help='simulated static seconds replayed through allan_node (at 5x)')
     add_common(p, default_out='out/demo')
@@ -113,7 +116,7 @@ def run(args) -> int:
             steps(f'live: bench_sim_node -> swing_kf_node, {args.live_duration:g} s simulated')
             from gyro_char.commands.demo_live import run_live
             live = run_live(cfg, args.seed, args.live_duration, args.effect, log,
-                            config_file=args.config)
+                            rate_factor=args.live_rate_factor, config_file=args.config)
             if live.get('missing'):
                 missing.append(live['missing'])
         if live_static:
@@ -133,10 +136,17 @@ def run(args) -> int:
         text += ['', 'effects added to both runs: '
                  + ', '.join(f'{e.name} {e.params}' for e in effects)]
     if live and not live.get('missing'):
-        text.append(f'live node: {args.live_duration:g} s replayed at 3x real time over DDS '
-                    f'(seed {args.seed}); the filter used {live["samples_gyro"]} gyro + '
-                    f'{live["samples_encoder"]} encoder samples (best effort), converged '
-                    f'{bool(live["converged"])}')
+        sent = int(round(args.live_duration * cfg.gyro.rate_hz))
+        got = min(live['samples_gyro'] or 0, live['samples_encoder'] or 0)
+        text.append(f'live node: {args.live_duration:g} s replayed at '
+                    f'{args.live_rate_factor:g}x real time over DDS (seed {args.seed}); the '
+                    f'filter used {live["samples_gyro"]} gyro + {live["samples_encoder"]} '
+                    f'encoder samples of {sent} each, converged {bool(live["converged"])}')
+        if got < 0.99 * sent:
+            text.append(f'warning: {100 * (1 - got / sent):.0f} % of the live samples were '
+                        'lost (best-effort transport on a loaded machine); a gyro angle '
+                        'integrated across lost samples is wrong, so the live column is not '
+                        'comparable - use a smaller --live-rate-factor')
     if live_noise:
         text.append(f'live allan_node: {args.live_static_duration:g} s static record replayed '
                     f'at 5x real time (seed {args.seed + 1}, a shorter record than the offline '
