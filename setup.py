@@ -33,6 +33,7 @@ setup(
         'rosbags>=0.10',
         'filterpy>=1.4',
         'numba>=0.59',
+        'threadpoolctl>=3.1',
     ],
     zip_safe=True,
     maintainer='gyro_char developers',
