@@ -25,9 +25,13 @@ def test_diagnose_static_finds_an_unannounced_tone_and_writes_the_contract(tmp_p
     x = np.round(x / 0.05) * 0.05          # the ADIS16405's 0.05 deg/s output step
     csv = tmp_path / 'rec.csv'
     _write_csv(csv, x)
+    # A second record of the same sensor, withheld from the fit.
+    x2 = 0.4 * rng.standard_normal(n) + 0.25 * np.sin(2 * np.pi * 23.0 * t + 2.0)
+    held = tmp_path / 'held.csv'
+    _write_csv(held, np.round(x2 / 0.05) * 0.05)
     out = tmp_path / 'out'
     rc = main(['diagnose', '--kind', 'static', str(csv), '--out', str(out), '--repeats', '5',
-               '--quiet'])
+               '--holdout', str(held), '--quiet'])
     assert rc == 0
     d = json.loads((out / 'diagnosis.json').read_text())
     assert CONTRACT <= set(d)
@@ -46,6 +50,10 @@ def test_diagnose_static_finds_an_unannounced_tone_and_writes_the_contract(tmp_p
     # ... down to what the simulation scores against itself
     assert d['final_gap'] < d['null_gap']['final_model_q95'] < d['baseline_gap']
     assert (out / 'diagnosis_gyro_x.png').stat().st_size > 10_000
+    # The model fitted on the first record explains the withheld one too.
+    h = d['holdout']
+    assert h['final_gap'] < 0.6 * h['baseline_gap']
+    assert [e['name'] for e in h['effects']] == d['selected_effects']
 
 
 @pytest.mark.parametrize('args, message', [
