@@ -196,3 +196,29 @@ def test_unknown_effect_is_refused_in_process(context):
     with pytest.raises(InputError, match='unknown effect'):
         BenchSimNode(context=context, parameter_overrides=[
             Parameter('effects', value=['warp_drive'])])
+
+
+def test_wait_for_subscribers_holds_the_first_sample(context):
+    node = BenchSimNode(context=context, parameter_overrides=[
+        Parameter('duration_s', value=1.0), Parameter('kind', value='static'),
+        Parameter('rate_factor', value=2.0), Parameter('wait_for_subscribers', value=1)])
+    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    end = time.monotonic() + 0.5
+    while time.monotonic() < end:
+        executor.spin_once(timeout_sec=0.01)
+    assert node.published['imu'] == 0 and node.waiting
+    listener = rclpy.create_node('bench_sim_wait_listener', context=context)
+    imu = []
+    listener.create_subscription(Imu, 'imu/data_raw', imu.append, DEEP)
+    executor.add_node(listener)
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline and len(imu) < 333:
+        executor.spin_once(timeout_sec=0.01)
+    base = node.stamp_base_ns
+    executor.shutdown()
+    node.destroy_node()
+    listener.destroy_node()
+    run = simulate_static(load(), duration=1.0, seed=0)
+    assert len(imu) == len(run.imu)
+    assert _stamp(imu[0]) == base + int(np.round(run.imu.t[0] * 1e9))

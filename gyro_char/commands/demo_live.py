@@ -23,7 +23,9 @@ def _env() -> dict:
 
 def _sim_cmd(cfg, kind: str, seed: int, duration: float, rate_factor: float, effects,
              config_file: Optional[str]) -> List[str]:
+    # The consumer node must see the first sample: hold the run until it has subscribed.
     cmd = [sys.executable, '-m', 'gyro_char.nodes.bench_sim_node', '--ros-args',
+           '-p', 'wait_for_subscribers:=1',
            '-p', f'preset:={cfg.preset}', '-p', f'seed:={seed}', '-p', f'kind:={kind}',
            '-p', f'duration_s:={float(duration)}', '-p', f'rate_factor:={float(rate_factor)}',
            '-p', f'period_s:={float(cfg.stand.period_s)}']

@@ -55,6 +55,9 @@ PARAMS = {
     'max_batch': (20000, 'most messages per stream per tick (beyond: falls behind, counted)',
                   False, [IntegerRange(from_value=1, to_value=10 ** 7, step=1)]),
     'repeat': (False, 'start a new run (seed + 1) when one ends', False, None),
+    'wait_for_subscribers': (0, 'hold the first sample until this many subscribers match '
+                             'each output topic (0 = publish at once)', True,
+                             [IntegerRange(from_value=0, to_value=1000, step=1)]),
     'imu_topic': ('imu/data_raw', 'sensor_msgs/Imu output topic', True, None),
     'encoder_topic': ('stand/joint_states', 'sensor_msgs/JointState output topic', True, None),
     'joint_name': ('stand_joint', 'JointState name of the swing axis', True, None),
@@ -96,6 +99,7 @@ class BenchSimNode(Node):
         self.behind_ticks = 0
         # Stamps in integer nanoseconds: a float epoch (1.8e9 s) would keep only ~0.2 us.
         self.stamp_base_ns = int(self.get_clock().now().nanoseconds)
+        self.waiting = int(self.p['wait_for_subscribers']) > 0
         self._start_run(0.0)
         self.create_timer(self.p['publish_period_s'], self._tick)
 
@@ -168,7 +172,19 @@ class BenchSimNode(Node):
     def _set_stamp(msg: Any, ns: int) -> None:
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(ns), 1_000_000_000)
 
+    def _subscribers_ready(self) -> bool:
+        need = int(self.p['wait_for_subscribers'])
+        pubs = [self.imu_pub] + ([self.enc_pub] if self.enc_pub is not None else [])
+        if all(p.get_subscription_count() >= need for p in pubs):
+            self.waiting = False
+            # Simulated time starts now, not when the run was generated.
+            self.sim_at_wall0, self.wall0 = self.offset, time.monotonic()
+            self.get_logger().info(f'{need} subscriber(s) matched: publishing')
+        return not self.waiting
+
     def _tick(self) -> None:
+        if self.waiting and not self._subscribers_ready():
+            return
         now = self._sim_now(time.monotonic())
         cap = int(self.p['max_batch'])
         behind = False
