@@ -34,10 +34,10 @@ import contextlib
 from dataclasses import dataclass, field
 from typing import Dict, Optional, Tuple
 
-from gyro_char.allan_edf import chi2_interval
+from gyro_char.allan_edf import chi2_interval, chi2_ppf
 from gyro_char.noise_model import design_matrix, sensor_kind, SI_UNITS, TERMS
 import numpy as np
-from scipy import optimize, special, stats
+from scipy import optimize, special
 
 try:  # scipy's own HiGHS binding: warm-started LPs (see _L1Step); linprog otherwise.
     from scipy.optimize._highspy import _core as _highs_core
@@ -303,8 +303,8 @@ def _draw_curves(p2, edf, cov, n, rng):
     # Gaussian copula with exact log-chi-square marginals around the fitted curve.
     chol = np.linalg.cholesky(cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov))))
     g = rng.standard_normal((n, p2.size)) @ chol.T
-    u = np.clip(stats.norm.cdf(g), 1e-12, 1 - 1e-12)
-    return p2 * stats.chi2.ppf(u, edf) / edf
+    u = np.clip(special.ndtr(g), 1e-12, 1 - 1e-12)
+    return p2 * chi2_ppf(u, edf) / edf
 
 
 def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: str = 'l1',
