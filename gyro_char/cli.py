@@ -24,7 +24,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog='gyro-char', description=__doc__.strip().splitlines()[0])
+    parser = _Parser(prog='gyro-char', description=(
+        'Gyro / IMU characterization: Allan-variance noise terms, swing-stand Kalman-filter '
+        'calibration, the bench simulator and the sim-to-real diagnosis. INPUT is a ROS 2 bag '
+        '(sqlite3 or mcap), a .mcap file, a ROS 1 .bag or a CSV (DESIGN.md section 3).'))
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', parser_class=_Parser)
     sub.required = True
     for name in SUBCOMMANDS:
