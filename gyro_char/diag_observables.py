@@ -153,9 +153,9 @@ def static_observables(x: np.ndarray, layout: Layout) -> Dict[str, np.ndarray]:
     }
 
 
-def detected_tones(x: np.ndarray, dt: float, *, min_prominence: float = 1.0,
+def detected_tones(x: np.ndarray, dt: float, *, min_prominence: float = 0.5,
                    max_tones: int = 3) -> np.ndarray:
-    """Frequencies (Hz) of the strongest narrow peaks, 10x above the running median or more."""
+    """Frequencies (Hz) of the strongest narrow peaks, 3x above the running median or more."""
     f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
     prom = tone_prominence(f, p)
     prom[:2] = 0.0

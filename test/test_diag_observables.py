@@ -88,3 +88,21 @@ def test_gap_yardstick_stops_an_effect_from_winning_by_adding_scatter():
     # In its own scatter the noisy model looks better; in the baseline's it does not.
     assert diag_gap.gap(real, noisy) < diag_gap.gap(real, base)
     assert diag_gap.gap(real, noisy, base.std) > 0.9 * diag_gap.gap(real, base)
+
+
+def test_observables_on_the_real_adis16405_record_match_what_is_known(adis_records):
+    # Outside reference: the shared data's README (0.05 deg/s step, lag-1 autocorrelation
+    # ~0.2-0.3 from the internal averaging, ARW 2.2-2.8 deg/sqrt(h) from ADEV at 1 s, a Z tone
+    # near 17-21 Hz) - measured here with the diagnosis's own observables.
+    from gyro_char.recordings import read_imu
+    rec = read_imu(str(adis_records[0]), quiet=True)
+    n = 2 ** 16
+    for ch in ('gyro_x', 'gyro_y', 'gyro_z'):
+        x = rec.channels[ch][:n]
+        assert abs(diag_static.output_step(x) - 0.05 * np.pi / 180) < 1e-9
+        o = obs.static_observables(x, obs.static_layout(n, rec.dt))
+        assert 0.15 < o['acf'][0] < 0.3
+        base = diag_static.fit_baseline(x, rec.dt)
+        assert 2.1 < base.N * 180 / np.pi * 60 < 2.9        # deg/sqrt(h)
+    tone = obs.detected_tones(rec.channels['gyro_z'][:n], rec.dt)
+    assert tone.size and 17.0 < tone[0] < 23.0
