@@ -13,7 +13,8 @@ twins of those records under a list of effects, and the candidate effects' searc
 4. adds effects greedily while the best one shrinks the gap by more than ``2 σ_null`` and the
    gap is still above the null's 95th percentile (``steps``, ``selected_effects``);
 5. flags a step as ambiguous when other candidates shrink the gap as much within ``2 σ_null``,
-   naming the run that would separate them instead of pretending to know.
+   naming the run that would separate them instead of pretending to know; with three or more
+   such candidates none is selected and the search stops.
 """
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence
@@ -189,10 +190,17 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                   if fits[n][2].gap - ev.gap <= shrink_needed
                   and current.gap - fits[n][2].gap > shrink_needed]
         if rivals:
+            # Two look-alikes: keep the best, say which run would separate them. Three or more
+            # unrelated effects shrinking the gap equally: none of them is evidenced (they are
+            # fitting what is left of the noise), so stop without selecting.
+            chosen = len(rivals) == 1
             ambiguous.append({'step': step + 1, 'effects': [best] + rivals,
                               'gap_after': [fits[n][2].gap for n in [best] + rivals],
+                              'selected': chosen,
                               'separating_run': '; '.join(separating_run(best, r)
                                                           for r in rivals)})
+            if not chosen:
+                break
         selected.append((best, params))
         nuisance = best_nuisance
         steps.append({'effect': best, 'params': _jsonable(params), 'gap_after': ev.gap})
