@@ -9,13 +9,16 @@ across chunk boundaries. Both filters share the reference epoch t_ref (by defaul
 stamp seen on either stream), which is what aligns them (see ``swing_align``).
 
 Samples that cannot be used are counted, never silently absorbed: non-finite values and stamps
-that do not advance (duplicates, out of order) are dropped; gyro gaps longer than
-``GYRO_GAP_FACTOR`` times the running median interval are integrated across but reported.
+that do not advance (duplicates, out of order) are dropped. A gyro gap longer than
+``swing_batch.GAP_RELEASE_FACTOR`` reference intervals (3 or more samples lost) releases the
+integrated angle's offset in the kernel (see ``swing_batch``: the motion in the gap is unknown),
+is left out of the trapezoid gain, and is counted (``gaps_released``, ``notes``); shorter gaps
+stay integrated.
 """
 from typing import List, Optional, Tuple
 
 from gyro_char import swing_batch
-from gyro_char.swing_align import GYRO_GAP_FACTOR, trapezoid_gain
+from gyro_char.swing_align import trapezoid_gain
 from gyro_char.swing_model import (
     combine, Estimate, FilterResult, SwingEstimates, SwingNoise)
 import numpy as np
@@ -34,7 +37,6 @@ class _Stream:
         self.buffered = 0
         self.last_t = -np.inf
         self.rejected = 0
-        self.gaps = 0
 
 
 class SwingOnline:
@@ -60,7 +62,6 @@ class SwingOnline:
         self._enc = _Stream(swing_batch.ENCODER, self.noise.encoder_sigma)
         self._gyr = _Stream(swing_batch.GYRO, self.noise.gyro_arw)
         self._gyro_last: Optional[Tuple[float, float, float]] = None  # tau, rate, angle
-        self._dt_median = None
         self._gain_sum = 0.0
         self._gain_steps = 0
 
@@ -116,13 +117,11 @@ class SwingOnline:
         dt = np.diff(tt)
         angle = p_angle + np.cumsum(0.5 * (rr[1:] + rr[:-1]) * dt)
         steps = dt if self._gyro_last is not None else dt[1:]
-        self._gain_sum += trapezoid_gain(steps, self.period_s) * steps.size
-        self._gain_steps += steps.size
-        pos = dt[dt > 0]
-        if pos.size:
-            med = float(np.median(pos))
-            self._dt_median = med if self._dt_median is None else self._dt_median
-            self._gyr.gaps += int((pos > GYRO_GAP_FACTOR * self._dt_median).sum())
+        # Released gaps carry no increment, so they take no part in the integration's gain.
+        steps = steps[~swing_batch.gap_steps(self._gyr.state, tau)[-steps.size:]]
+        if steps.size:
+            self._gain_sum += trapezoid_gain(steps, self.period_s) * steps.size
+            self._gain_steps += steps.size
         self._gyro_last = (float(tau[-1]), float(rate[-1]), float(angle[-1]))
         return angle
 
@@ -146,9 +145,9 @@ class SwingOnline:
         for name, s in (('encoder', self._enc), ('imu', self._gyr)):
             if s.rejected:
                 notes.append(f'{name}: {s.rejected} samples dropped (NaN or stamps not advancing)')
-        if self._gyr.gaps:
-            notes.append(f'imu: {self._gyr.gaps} gaps > {GYRO_GAP_FACTOR:g} median intervals '
-                         'integrated across')
+        if self.gaps_released:
+            notes.append(f'imu: {self.gaps_released} gaps > {swing_batch.GAP_RELEASE_FACTOR:g} '
+                         'sample intervals bridged by releasing the gyro angle offset')
         return notes
 
     def estimates(self) -> SwingEstimates:
@@ -162,6 +161,11 @@ class SwingOnline:
                 self._enc.state.count, self._gyr.state.count, False, notes=self.notes())
         gain = self._gain_sum / self._gain_steps if self._gain_steps else 1.0
         return combine(enc, gyr, self.period_s, self.notes(), gyro_gain=gain)
+
+    @property
+    def gaps_released(self) -> int:
+        """Count the gyro gaps bridged so far by releasing the angle offset (folded samples)."""
+        return self._gyr.state.gaps
 
     @property
     def rejected(self) -> Tuple[int, int]:

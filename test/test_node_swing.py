@@ -2,6 +2,7 @@
 import subprocess
 import sys
 import time
+from types import SimpleNamespace
 
 from gyro_char.bench_sim import simulate_swing
 from gyro_char.nodes.node_common import InvalidParameter
@@ -94,6 +95,30 @@ def test_estimates_match_truth_in_process(sim):
         future = client.call_async(Trigger.Request())
         assert spin_until(ex, future.done, 5.0) and future.result().success
         assert node.core.estimates().samples == 0
+        node.destroy_node()
+
+
+def test_imu_gaps_are_bridged_and_reported(sim):
+    # Three stalls of the IMU stream (200-400 ms): each releases the gyro angle's offset in the
+    # core; the estimates stay within 4 sigma and /diagnostics counts the gaps.
+    t = sim.imu.t
+    keep = np.ones(t.size, dtype=bool)
+    for start, length in ((4.0, 0.2), (9.0, 0.4), (15.0, 0.3)):
+        keep[(t >= t[0] + start) & (t < t[0] + start + length)] = False
+    imu = SimpleNamespace(t=t[keep], channels={'gyro_x': sim.imu.channels['gyro_x'][keep]})
+    run = SimpleNamespace(imu=imu, encoder=sim.encoder)
+    truth = sim.truth['swing']
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context)
+        _feed_run(ex, node, feeder, run)
+        v = node.estimate_values()
+        assert _within(v['scale_factor_error'], v['scale_factor_error_sigma'],
+                       truth['scale_factor_error'])
+        assert _within(v['bias_rad_s'], v['bias_sigma_rad_s'], truth['bias'])
+        assert _within(v['bias_drift_rad_s2'], v['bias_drift_sigma_rad_s2'], truth['bias_drift'])
+        node.publish_diagnostics()
+        assert spin_until(ex, lambda: (listener.values(INPUTS) or {}).get('imu_gaps_bridged')
+                          == 3, 3.0)
         node.destroy_node()
 
 

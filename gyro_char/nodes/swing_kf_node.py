@@ -247,6 +247,8 @@ class SwingKfNode(Node):
         if grew:
             problems.append(f'{grew} JointState messages without joint {self._joint!r}')
         values['encoder_dropped_missing_joint'] = self.missing_joint
+        # Gyro gaps of 3+ samples: bridged by releasing the integrated angle's offset (core).
+        values['imu_gaps_bridged'] = self.core.gaps_released
         values['filter_restarts'] = self.core_restarts
         values['processing_errors'] = self.processing_errors
         values['converged'] = self._converged
