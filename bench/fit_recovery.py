@@ -2,10 +2,10 @@
 Recovery of the IEEE 952 coefficients on synthetic static records with known truth.
 
 White + 1/f flicker + rate random walk + quantization + ramp (``gyro_char.noise_gen``), default
-8 h at 200 Hz, several seeds; Allan variance on the paper's grid, then both fits ('l1', the
-paper's objective, and 'weighted'). Prints, per seed, the relative error of each coefficient
-and whether the term was resolved, then the median |error| per term and how often the 68 %
-interval held the truth (it should be about 68 %).
+8 h at 200 Hz, several seeds; Allan variance on the paper's grid, then the fits ('l1', the
+paper's objective, 'l1w' and 'weighted', see gyro_char.noise_fit). Prints, per seed, the
+relative error of each coefficient and whether the term was resolved, then the median |error|
+per term and how often the 68 % interval held the truth (it should be about 68 %).
 
     python bench/fit_recovery.py                 # 8 h, 200 Hz, 8 seeds (a few minutes)
     python bench/fit_recovery.py --hours 2 --seeds 3
@@ -43,7 +43,7 @@ def main() -> None:
     ap.add_argument('--hours', type=float, default=8.0)
     ap.add_argument('--rate', type=float, default=200.0, help='sample rate, Hz')
     ap.add_argument('--seeds', type=int, default=8)
-    ap.add_argument('--methods', default='l1,weighted')
+    ap.add_argument('--methods', default='l1,l1w,weighted')
     args = ap.parse_args()
     methods = args.methods.split(',')
     print('truth: ' + ', '.join(f'{t} {to_human(t, "gyro", v):.4g} {HUMAN_UNITS["gyro"][t][1]}'

@@ -1,6 +1,6 @@
 """IEEE 952 fit: exact on model curves, the L1 optimum, term selection, recovery on synthetics."""
 from gyro_char.allan_input import compute
-from gyro_char.noise_fit import fit_l1, fit_noise, fit_result
+from gyro_char.noise_fit import _L1Step, _objective, fit_l1, fit_noise, fit_result
 from gyro_char.noise_gen import generate
 from gyro_char.noise_model import design_matrix, model_avar, TERMS
 from gyro_char.recordings import Recording
@@ -54,16 +54,40 @@ def test_unsupported_term_is_unresolved_with_upper_bound():
     assert set(fit.to_json()) == {'N', 'B', 'K', 'Q', 'R'}
 
 
-@pytest.mark.parametrize('method', ['l1', 'weighted'])
-def test_recovery_on_synthetic_records(method):
+SYN_TRUTH = {'N': 1e-3, 'B': 2e-4, 'K': 2e-5, 'Q': 3e-4, 'R': 1e-8}
+
+
+@pytest.fixture(scope='module')
+def synthetic_results():
+    dt, n = 0.02, 360_000
+    out = []
+    for seed in range(3):
+        rate = generate(n, dt, rng=np.random.default_rng(seed), **SYN_TRUTH)
+        out.append(compute(Recording(np.arange(n) * dt, {'gyro_x': rate})))
+    return out
+
+
+def test_warm_highs_step_matches_linprog():
+    # The warm-started HiGHS model and the cold linprog fallback reach the same L1 optimum.
+    rng = np.random.default_rng(5)
+    a_mat = design_matrix(TAU)
+    for _ in range(3):
+        avar = model_avar(TAU, TRUE) * np.exp(0.3 * rng.standard_normal(TAU.size))
+        warm = _L1Step(a_mat, avar)
+        cold = _L1Step(a_mat, avar)
+        cold.highs = None
+        z_w, z_c = fit_l1(a_mat, avar, step=warm), fit_l1(a_mat, avar, step=cold)
+        assert _objective(z_w, a_mat, np.log(avar)) == pytest.approx(
+            _objective(z_c, a_mat, np.log(avar)), rel=1e-9)
+
+
+@pytest.mark.parametrize('method', ['l1', 'l1w', 'weighted'])
+def test_recovery_on_synthetic_records(method, synthetic_results):
     # Small version of bench/fit_recovery.py: 2 h at 50 Hz, 3 seeds, all five terms (K
     # dominates only the last 1.5 decades of tau, so its error is larger than in 8 h).
-    dt, n = 0.02, 360_000
-    truth = {'N': 1e-3, 'B': 2e-4, 'K': 2e-5, 'Q': 3e-4, 'R': 1e-8}
+    truth = SYN_TRUTH
     errs = []
-    for seed in range(3):
-        rate = generate(n, dt, rng=np.random.default_rng(seed), **truth)
-        res = compute(Recording(np.arange(n) * dt, {'gyro_x': rate}))
+    for seed, res in enumerate(synthetic_results):
         fit = fit_result(res, method=method, n_boot=20, seed=seed)['gyro_x']
         errs.append({t: fit.terms[t].value / truth[t] - 1.0 for t in truth})
         assert fit.terms['N'].resolved and fit.terms['Q'].resolved

@@ -24,10 +24,11 @@ def register(subparsers) -> None:
     p.add_argument('--topic', default=None, help='sensor_msgs/Imu topic (bags)')
     p.add_argument('--channels', default=None,
                    help='comma-separated, e.g. gyro_x,gyro_y (default: all IMU channels)')
-    p.add_argument('--fit', choices=('l1', 'weighted'), default='l1',
+    p.add_argument('--fit', choices=('l1', 'l1w', 'weighted'), default='l1',
                    help='l1: the log-domain L1 objective of the paper (robust where the '
-                        'sensor departs from formula (4)); weighted: EDF-weighted log least '
-                        'squares (more accurate K when formula (4) holds)')
+                        'sensor departs from formula (4)); l1w: the same on log estimates '
+                        'standardised by their EDF and median-unbiased (more accurate K); '
+                        'weighted: EDF-weighted log least squares')
     p.add_argument('--tau-min', type=float, default=None, metavar='S',
                    help='fit only tau >= S (e.g. to skip a sensor filter at short tau)')
     p.add_argument('--m-max', type=int, default=None,
