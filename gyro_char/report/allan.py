@@ -55,7 +55,9 @@ def plot_allan(res: AllanResult, fits: Dict[str, NoiseFit], path: str, title: st
         ax.set_title(f'{kind}: overlapping Allan deviation, 68 % band')
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
+    # Fixed margins: tight_layout measured every tick label (1.5 s of a 3 h run's ~10 s CPU).
+    fig.subplots_adjust(left=0.1 / len(kinds), right=1.0 - 0.03 / len(kinds), bottom=0.09,
+                        top=0.9 if title else 0.94, wspace=0.2)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
