@@ -18,6 +18,10 @@ from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from sensor_msgs.msg import Imu, JointState
 
 ROOT = Path(__file__).resolve().parents[1]
+EPOCH = 1000.0  # stamp offset (s) of the simulated runs fed to the nodes
+# ROS_DOMAIN_IDs of the node tests (this session's range 80-89), one per test file and mode.
+DOMAINS = {'swing': (80, 81), 'allan': (82, 83), 'bench_sim': (84, 85), 'dds_smoke': 86,
+           'colcon': 87}
 
 
 def ros_env(domain_id: int) -> Dict[str, str]:
@@ -59,6 +63,30 @@ def spin_until(executor, predicate: Callable[[], bool], timeout: float) -> bool:
             return True
         executor.spin_once(timeout_sec=0.02)
     return predicate()
+
+
+def collect(domain_id: int, msg_type, topic: str, qos, count: int, timeout: float,
+            alive: Callable[[], bool] = lambda: True, convert: Callable = lambda m: m,
+            node_name: str = 'collector', poll: float = 0.1) -> list:
+    """
+    Receive ``count`` messages of ``topic`` in a fresh context on ``domain_id`` (loopback).
+
+    Spins a single-threaded executor until ``count`` messages arrived, ``timeout`` seconds
+    passed or ``alive()`` turned false (e.g. the publishing child exited), then tears the node
+    and context down. Returns the messages received (through ``convert``), however many.
+    """
+    received: list = []
+    with ros_context(domain_id) as context:
+        node = rclpy.create_node(node_name, context=context)
+        node.create_subscription(msg_type, topic, lambda m: received.append(convert(m)), qos)
+        executor = rclpy.executors.SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        deadline = time.monotonic() + timeout
+        while len(received) < count and time.monotonic() < deadline and alive():
+            executor.spin_once(timeout_sec=poll)
+        executor.shutdown()
+        node.destroy_node()
+    return received
 
 
 class Listener:

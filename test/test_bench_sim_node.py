@@ -5,11 +5,8 @@ Checks that the published values are exactly the core's simulated run for the sa
 the stamps are the simulated sample instants (plus the start epoch), and that bad parameters
 are refused with a reason.
 """
-import os
-from pathlib import Path
 import subprocess
 import sys
-import time
 
 from gyro_char.bench_sim import simulate_static, simulate_swing
 from gyro_char.sim_config import load
@@ -17,15 +14,15 @@ import numpy as np
 import pytest
 
 rclpy = pytest.importorskip('rclpy')
+from node_harness import (  # noqa: E402,I100
+    collect, DOMAINS, ROOT, ros_context, ros_env, spin_until)
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import Imu, JointState  # noqa: E402
 
 from gyro_char.nodes.bench_sim_node import BenchSimNode  # noqa: E402,I100
 
-ROOT = Path(__file__).resolve().parents[1]
-DOMAIN_IN_PROCESS = 53
-DOMAIN_CROSS_PROCESS = 54
+DOMAIN_IN_PROCESS, DOMAIN_CROSS_PROCESS = DOMAINS['bench_sim']
 DEEP = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10000,
                   reliability=ReliabilityPolicy.BEST_EFFORT)
 
@@ -36,10 +33,22 @@ def _stamp(msg):
 
 @pytest.fixture
 def context():
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx, domain_id=DOMAIN_IN_PROCESS)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
+    with ros_context(DOMAIN_IN_PROCESS) as ctx:
+        yield ctx
+
+
+def _graph(context, node, listener):
+    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    for n in (node, listener):
+        if n is not None:
+            executor.add_node(n)
+    return executor
+
+
+def _teardown(executor, *nodes):
+    executor.shutdown()
+    for n in nodes:
+        n.destroy_node()
 
 
 def test_in_process_swing_values_are_the_cores_run(context):
@@ -50,16 +59,10 @@ def test_in_process_swing_values_are_the_cores_run(context):
     imu, enc = [], []
     listener.create_subscription(Imu, 'imu/data_raw', imu.append, DEEP)
     listener.create_subscription(JointState, 'stand/joint_states', enc.append, DEEP)
-    executor = rclpy.executors.SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    executor.add_node(listener)
-    deadline = time.monotonic() + 15.0
-    while time.monotonic() < deadline and (len(imu) < 2000 or len(enc) < 2000):
-        executor.spin_once(timeout_sec=0.01)
+    executor = _graph(context, node, listener)
+    spin_until(executor, lambda: len(imu) >= 2000 and len(enc) >= 2000, 15.0)
     base = node.stamp_base_ns
-    executor.shutdown()
-    node.destroy_node()
-    listener.destroy_node()
+    _teardown(executor, node, listener)
     run = simulate_swing(load(), duration=2.0, seed=5)
     assert len(imu) >= 0.95 * len(run.imu) and len(enc) >= 0.95 * len(run.encoder)
     want_t = np.round(run.imu.t * 1e9).astype(np.int64) + base
@@ -95,14 +98,6 @@ def test_parameters_are_validated(context):
         BenchSimNode(context=context, parameter_overrides=[Parameter('kind', value='moving')])
 
 
-def _env():
-    env = dict(os.environ)
-    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    env['ROS_DOMAIN_ID'] = str(DOMAIN_CROSS_PROCESS)
-    env['PYTHONPATH'] = str(ROOT) + os.pathsep + env.get('PYTHONPATH', '')
-    return env
-
-
 def _node_cmd(*params):
     cmd = [sys.executable, '-m', 'gyro_char.nodes.bench_sim_node', '--ros-args',
            '--params-file', str(ROOT / 'config' / 'bench_sim_node.yaml')]
@@ -114,22 +109,13 @@ def _node_cmd(*params):
 def test_separate_process_static_run_over_loopback(monkeypatch):
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     proc = subprocess.Popen(_node_cmd('kind:=static', 'duration_s:=30.0', 'seed:=9'),
-                            env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx, domain_id=DOMAIN_CROSS_PROCESS)
-    imu = []
+                            env=ros_env(DOMAIN_CROSS_PROCESS), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
     try:
-        node = rclpy.create_node('bench_sim_remote_listener', context=ctx)
-        node.create_subscription(Imu, 'imu/data_raw', imu.append, DEEP)
-        executor = rclpy.executors.SingleThreadedExecutor(context=ctx)
-        executor.add_node(node)
-        deadline = time.monotonic() + 20.0
-        while len(imu) < 300 and time.monotonic() < deadline and proc.poll() is None:
-            executor.spin_once(timeout_sec=0.05)
-        executor.shutdown()
-        node.destroy_node()
+        imu = collect(DOMAIN_CROSS_PROCESS, Imu, 'imu/data_raw', DEEP, 300, 20.0,
+                      alive=lambda: proc.poll() is None, node_name='bench_sim_remote_listener',
+                      poll=0.05)
     finally:
-        rclpy.try_shutdown(context=ctx)
         proc.terminate()
         _, err = proc.communicate(timeout=10)
     assert len(imu) >= 300, f'no Imu from bench_sim_node; stderr: {err.decode()[-2000:]}'
@@ -158,7 +144,8 @@ def test_separate_process_static_run_over_loopback(monkeypatch):
     ('kind:=moving', b'kind must be swing or static'),
 ])
 def test_bad_parameter_exits_2(param, message):
-    proc = subprocess.run(_node_cmd(param), env=_env(), capture_output=True, timeout=60)
+    proc = subprocess.run(_node_cmd(param), env=ros_env(DOMAIN_CROSS_PROCESS),
+                          capture_output=True, timeout=60)
     assert proc.returncode == 2
     assert message in proc.stdout + proc.stderr
 
@@ -170,16 +157,10 @@ def test_repeat_continues_stamps_with_the_next_seed(context):
     node = BenchSimNode(context=context, parameter_overrides=[
         Parameter('duration_s', value=0.3), Parameter('rate_factor', value=0.5),
         Parameter('kind', value='static'), Parameter('repeat', value=True)])
-    executor = rclpy.executors.SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    executor.add_node(listener)
-    deadline = time.monotonic() + 10.0
-    while time.monotonic() < deadline and node.run_index < 2:
-        executor.spin_once(timeout_sec=0.01)
+    executor = _graph(context, node, listener)
+    spin_until(executor, lambda: node.run_index >= 2, 10.0)
     runs = node.run_index
-    executor.shutdown()
-    node.destroy_node()
-    listener.destroy_node()
+    _teardown(executor, node, listener)
     assert runs >= 2
     stamps = np.array([_stamp(m) for m in imu])
     assert np.all(np.diff(stamps) > 0)
@@ -202,23 +183,16 @@ def test_wait_for_subscribers_holds_the_first_sample(context):
     node = BenchSimNode(context=context, parameter_overrides=[
         Parameter('duration_s', value=1.0), Parameter('kind', value='static'),
         Parameter('rate_factor', value=2.0), Parameter('wait_for_subscribers', value=1)])
-    executor = rclpy.executors.SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    end = time.monotonic() + 0.5
-    while time.monotonic() < end:
-        executor.spin_once(timeout_sec=0.01)
+    executor = _graph(context, node, None)
+    spin_until(executor, lambda: False, 0.5)  # no subscriber for 0.5 s: nothing goes out
     assert node.published['imu'] == 0 and node.waiting
     listener = rclpy.create_node('bench_sim_wait_listener', context=context)
     imu = []
     listener.create_subscription(Imu, 'imu/data_raw', imu.append, DEEP)
     executor.add_node(listener)
-    deadline = time.monotonic() + 10.0
-    while time.monotonic() < deadline and len(imu) < 333:
-        executor.spin_once(timeout_sec=0.01)
+    spin_until(executor, lambda: len(imu) >= 333, 10.0)
     base = node.stamp_base_ns
-    executor.shutdown()
-    node.destroy_node()
-    listener.destroy_node()
+    _teardown(executor, node, listener)
     run = simulate_static(load(), duration=1.0, seed=0)
     assert len(imu) == len(run.imu)
     assert _stamp(imu[0]) == base + int(np.round(run.imu.t[0] * 1e9))

@@ -11,16 +11,15 @@ from pathlib import Path
 import shutil
 import subprocess
 import sys
-import time
 
 import pytest
 
 rclpy = pytest.importorskip('rclpy')
+from node_harness import collect, DOMAINS, ROOT  # noqa: E402,I100
 from rclpy.qos import qos_profile_sensor_data  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-DOMAIN_ID = 12
+DOMAIN_ID = DOMAINS['colcon']
 NODES = ('swing_kf_node', 'allan_node', 'bench_sim_node')
 SKIP = shutil.ignore_patterns('.git', '.venv', 'build', 'install', 'log', 'out', '__pycache__',
                               '*.egg-info', '.pytest_cache')
@@ -62,20 +61,10 @@ def test_installed_node_runs_with_params_file(workspace):
         [str(workspace / 'lib' / 'gyro_char' / 'bench_sim_node'), '--ros-args',
          '--params-file', str(params)], env=env, cwd=workspace,
         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=DOMAIN_ID)
-    received = []
     try:
-        node = rclpy.create_node('colcon_listener', context=context)
-        node.create_subscription(Imu, 'imu/data_raw', received.append, qos_profile_sensor_data)
-        executor = rclpy.executors.SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        deadline = time.monotonic() + 30.0
-        while len(received) < 20 and time.monotonic() < deadline and proc.poll() is None:
-            executor.spin_once(timeout_sec=0.1)
-        node.destroy_node()
+        received = collect(DOMAIN_ID, Imu, 'imu/data_raw', qos_profile_sensor_data, 20, 30.0,
+                           alive=lambda: proc.poll() is None, node_name='colcon_listener')
     finally:
-        rclpy.try_shutdown(context=context)
         proc.terminate()
         try:
             _, err = proc.communicate(timeout=10)

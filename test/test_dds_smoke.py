@@ -4,22 +4,20 @@ Real DDS smoke test: a separate process publishes sensor_msgs/Imu on loopback.
 The messages cross Fast DDS between two processes and are read back through ``msg_adapters``;
 the same adapter is also checked on a rosbags-deserialized message (duck typing).
 """
-import os
-from pathlib import Path
 import subprocess
 import sys
 import textwrap
-import time
 
 from msg_adapters import fill_imu, imu_sample, joint_angle
 import numpy as np
 import pytest
 
 rclpy = pytest.importorskip('rclpy')
+from node_harness import collect, DOMAINS, ros_env  # noqa: E402,I100
 from rclpy.qos import qos_profile_sensor_data  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
-DOMAIN_ID = 11
+DOMAIN_ID = DOMAINS['dds_smoke']
 
 PUBLISHER = textwrap.dedent("""
     import time
@@ -45,34 +43,15 @@ PUBLISHER = textwrap.dedent("""
 """)
 
 
-def _env() -> dict:
-    env = dict(os.environ)
-    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    env['ROS_DOMAIN_ID'] = str(DOMAIN_ID)
-    env['PYTHONPATH'] = str(Path(__file__).resolve().parents[1]) + os.pathsep + env.get(
-        'PYTHONPATH', '')
-    return env
-
-
 def test_imu_crosses_dds_between_processes(monkeypatch):
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    proc = subprocess.Popen([sys.executable, '-c', PUBLISHER], env=_env(),
+    proc = subprocess.Popen([sys.executable, '-c', PUBLISHER], env=ros_env(DOMAIN_ID),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=DOMAIN_ID)
-    received = []
     try:
-        node = rclpy.create_node('smoke_imu_listener', context=context)
-        node.create_subscription(Imu, 'imu/data_raw', lambda m: received.append(imu_sample(m)),
-                                 qos_profile_sensor_data)
-        executor = rclpy.executors.SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        deadline = time.monotonic() + 15.0
-        while len(received) < 5 and time.monotonic() < deadline and proc.poll() is None:
-            executor.spin_once(timeout_sec=0.1)
-        node.destroy_node()
+        received = collect(DOMAIN_ID, Imu, 'imu/data_raw', qos_profile_sensor_data, 5, 15.0,
+                           alive=lambda: proc.poll() is None, convert=imu_sample,
+                           node_name='smoke_imu_listener')
     finally:
-        rclpy.try_shutdown(context=context)
         proc.kill()
         _, err = proc.communicate(timeout=10)
     assert len(received) >= 5, f'no Imu arrived over DDS; publisher stderr: {err.decode()}'

@@ -14,8 +14,8 @@ from gyro_char.nodes.allan_node import AllanNode
 from gyro_char.nodes.node_common import LATCHED_1
 from msg_adapters.diagnostics import parse_multiarray
 from node_harness import (
-    Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context, ros_env,
-    spin_until, stop)
+    DOMAINS, EPOCH, Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context,
+    ros_env, spin_until, stop)
 import numpy as np
 import pytest
 import rclpy
@@ -23,9 +23,7 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
-DOMAIN_IN_PROCESS = 26
-DOMAIN_PROCESS = 27
-EPOCH = 1000.0
+DOMAIN_IN_PROCESS, DOMAIN_PROCESS = DOMAINS['allan']
 INPUTS = 'allan_node: inputs'
 CHANNELS = ['gyro_x', 'gyro_y', 'gyro_z', 'accel_x', 'accel_y', 'accel_z']
 

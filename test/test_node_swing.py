@@ -8,17 +8,15 @@ from gyro_char.bench_sim import simulate_swing
 from gyro_char.nodes.node_common import InvalidParameter
 from gyro_char.nodes.swing_kf_node import SwingKfNode
 from node_harness import (
-    Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context, ros_env,
-    spin_until, stop)
+    DOMAINS, EPOCH, Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context,
+    ros_env, spin_until, stop)
 import numpy as np
 import pytest
 import rclpy
 from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
-DOMAIN_IN_PROCESS = 24
-DOMAIN_PROCESS = 25
-EPOCH = 1000.0
+DOMAIN_IN_PROCESS, DOMAIN_PROCESS = DOMAINS['swing']
 EST = 'swing_kf_node: estimates'
 INPUTS = 'swing_kf_node: inputs'
 

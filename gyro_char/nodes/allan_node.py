@@ -17,10 +17,10 @@ import time
 from typing import Any, Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from gyro_char.allan_live import AllanLive
+from gyro_char.allan_live import AllanLive, return_freed_memory
 from gyro_char.checkpoint import load_checkpoint, PeriodicCheckpoint
 from gyro_char.nodes.node_common import (
-    declare, InvalidParameter, LATCHED_1, Param, RELIABLE_10, sensor_qos, spin,
+    declare, LATCHED_1, Param, publish_status, RELIABLE_10, run_node, sensor_qos,
     split_at_markers, validate)
 from gyro_char.recordings import IMU_CHANNELS, InputError
 from gyro_char.stream_health import DROP, RESTART, StreamHealth
@@ -28,8 +28,6 @@ from msg_adapters import imu_sample
 from msg_adapters.diagnostics import (
     diagnostic_array, diagnostic_status, ERROR, multiarray, OK, WARN)
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
@@ -87,6 +85,7 @@ class AllanNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(NAME, **kwargs)
+        return_freed_memory()  # day-long runs: keep the accumulator's temporaries off the RSS
         self.p = declare(self, PARAMS)
         p = self.p
         self.live = AllanLive(
@@ -336,10 +335,8 @@ class AllanNode(Node):
     def publish_diagnostics(self) -> None:
         """Publish the input health, accumulation state and motion on /diagnostics."""
         level, message, values = self.health_status()
-        status = diagnostic_status(DiagnosticStatus, KeyValue, f'{NAME}: inputs', level,
-                                   message, self.p['hardware_id'], values)
-        self.diag_pub.publish(diagnostic_array(
-            DiagnosticArray, self.get_clock().now().to_msg(), [status]))
+        publish_status(self, self.diag_pub, f'{NAME}: inputs', level, message,
+                       self.p['hardware_id'], values)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
         self._q.clear()
@@ -354,26 +351,15 @@ class AllanNode(Node):
         return response
 
 
+def _last_checkpoint(node: AllanNode) -> None:
+    if node.checkpoint is not None:
+        node.process()
+        node.write_checkpoint()
+
+
 def main(args=None) -> int:
     """Run the node (Jazzy idiom; exit 2 on an invalid parameter)."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = AllanNode()
-        spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except InvalidParameter as exc:
-        print(f'{NAME}: invalid parameter: {exc}', flush=True)
-        return 2
-    finally:
-        if node is not None:
-            if node.checkpoint is not None:
-                node.process()
-                node.write_checkpoint()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(AllanNode, NAME, on_exit=_last_checkpoint, args=args)
 
 
 if __name__ == '__main__':

@@ -12,6 +12,7 @@ import time
 from typing import Any, List, Optional
 
 from gyro_char.bench_sim import simulate_static, simulate_swing
+from gyro_char.nodes.node_common import run_node
 from gyro_char.recordings import InputError
 from gyro_char.sim_config import load
 from msg_adapters import fill_imu, fill_joint_state
@@ -22,7 +23,6 @@ import rclpy
 from rclpy.exceptions import (
     InvalidParameterTypeException, InvalidParameterValueException,
     ParameterUninitializedException)
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Imu, JointState
@@ -219,21 +219,9 @@ class BenchSimNode(Node):
 
 def main(args=None) -> int:
     """Run the node (Jazzy idiom); exit 2 on invalid parameters or config."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = BenchSimNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (InputError, InvalidParameterValueException, InvalidParameterTypeException) as exc:
-        print(f'{NAME}: {exc}', flush=True)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(BenchSimNode, NAME, errors=(
+        InputError, InvalidParameterValueException, InvalidParameterTypeException),
+        error_prefix='', spin_fn=rclpy.spin, args=args)
 
 
 if __name__ == '__main__':

@@ -7,11 +7,14 @@ choices, finiteness) so that the node's on-set callback can refuse a value with 
 """
 from dataclasses import dataclass
 import math
-from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type
 
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from msg_adapters.diagnostics import diagnostic_array, diagnostic_status
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
-from rclpy.executors import SingleThreadedExecutor
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy)
 
@@ -143,6 +146,45 @@ def spin(node: Any, executor: Any = None) -> None:
             executor.spin_once(timeout_sec=0.2)
     finally:
         executor.remove_node(node)
+
+
+def publish_status(node: Any, publisher: Any, name: str, level: int, message: str,
+                   hardware_id: str, values: Dict[str, Any]) -> None:
+    """Publish one DiagnosticStatus (numeric/string ``values``) as a DiagnosticArray now."""
+    status = diagnostic_status(DiagnosticStatus, KeyValue, name, level, message, hardware_id,
+                               values)
+    publisher.publish(diagnostic_array(DiagnosticArray, node.get_clock().now().to_msg(),
+                                       [status]))
+
+
+def run_node(factory: Callable[[], Any], name: str,
+             errors: Tuple[Type[BaseException], ...] = (InvalidParameter,),
+             error_prefix: str = 'invalid parameter: ', spin_fn: Callable[[Any], None] = spin,
+             on_exit: Optional[Callable[[Any], None]] = None, args=None) -> int:
+    """
+    Run one node the Jazzy way: init, spin until Ctrl-C or shutdown, tear down; the exit code.
+
+    ``errors`` raised while building or spinning the node (a refused parameter, a bad config)
+    print one line ``<name>: <error_prefix><error>`` and give exit code 2. ``on_exit(node)``
+    runs before the node is destroyed (e.g. a last checkpoint).
+    """
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = factory()
+        spin_fn(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except errors as exc:
+        print(f'{name}: {error_prefix}{exc}', flush=True)
+        return 2
+    finally:
+        if node is not None:
+            if on_exit is not None:
+                on_exit(node)
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
 
 
 def split_at_markers(items: Sequence[Tuple]) -> List[List[Tuple]]:

@@ -11,17 +11,16 @@ from collections import deque
 import time
 from typing import Any, Dict, List
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray
 from gyro_char.nodes.node_common import (
-    declare, InvalidParameter, Param, RELIABLE_10, sensor_qos, spin, split_at_markers, validate)
+    declare, Param, publish_status, RELIABLE_10, run_node, sensor_qos, split_at_markers,
+    validate)
 from gyro_char.stream_health import DROP, RESTART, stream_skew_s, StreamHealth
 from gyro_char.swing_model import SwingNoise
 from gyro_char.swing_online import SwingOnline
 from msg_adapters import joint_angle, stamp_seconds
-from msg_adapters.diagnostics import diagnostic_array, diagnostic_status, ERROR, OK, WARN
+from msg_adapters.diagnostics import ERROR, OK, WARN
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import Imu, JointState
 from std_srvs.srv import Trigger
@@ -222,10 +221,8 @@ class SwingKfNode(Node):
         values = self.estimate_values()
         level = OK if values['converged'] else WARN
         msg = 'converged' if values['converged'] else 'not converged yet'
-        status = diagnostic_status(DiagnosticStatus, KeyValue, f'{NAME}: estimates', level,
-                                   msg, self.p['hardware_id'], values)
-        self.estimates_pub.publish(diagnostic_array(
-            DiagnosticArray, self.get_clock().now().to_msg(), [status]))
+        publish_status(self, self.estimates_pub, f'{NAME}: estimates', level, msg,
+                       self.p['hardware_id'], values)
         self._converged = values['converged']
 
     def health_status(self) -> tuple:
@@ -263,10 +260,8 @@ class SwingKfNode(Node):
     def publish_diagnostics(self) -> None:
         """Publish the input health and convergence on ``/diagnostics``."""
         level, message, values = self.health_status()
-        status = diagnostic_status(DiagnosticStatus, KeyValue, f'{NAME}: inputs', level,
-                                   message, self.p['hardware_id'], values)
-        self.diag_pub.publish(diagnostic_array(
-            DiagnosticArray, self.get_clock().now().to_msg(), [status]))
+        publish_status(self, self.diag_pub, f'{NAME}: inputs', level, message,
+                       self.p['hardware_id'], values)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
         self._imu_q.clear()
@@ -285,21 +280,7 @@ class SwingKfNode(Node):
 
 def main(args=None) -> int:
     """Run the node (Jazzy idiom; exit 2 on an invalid parameter)."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = SwingKfNode()
-        spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except InvalidParameter as exc:
-        print(f'{NAME}: invalid parameter: {exc}', flush=True)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(SwingKfNode, NAME, args=args)
 
 
 if __name__ == '__main__':
