@@ -79,10 +79,20 @@ def taus_to_m(taus: Sequence[float], dt: float, n: int) -> np.ndarray:
 
 
 def phase(rate: np.ndarray, dt: float) -> np.ndarray:
-    """Return x_0 = 0, x_j = dt * cumsum(rate - mean) along axis 0 (length n + 1)."""
+    """
+    Return x_0 = 0, x_j = dt * cumsum(rate - mean) along axis 0 (length n + 1).
+
+    Column-major (each channel's phase contiguous, as the kernel reads it); a column-major
+    ``rate`` is read without strides.
+    """
     rate = np.asarray(rate, dtype=np.float64)
-    x = np.zeros((rate.shape[0] + 1,) + rate.shape[1:])
-    np.cumsum((rate - rate.mean(axis=0)) * dt, axis=0, out=x[1:])
+    x = np.zeros((rate.shape[0] + 1,) + rate.shape[1:], order='F')
+    if rate.ndim == 1:
+        np.cumsum((rate - rate.mean()) * dt, out=x[1:])
+        return x
+    for c in range(rate.shape[1]):
+        col = rate[:, c]
+        np.cumsum((col - col.mean()) * dt, out=x[1:, c])
     return x
 
 
@@ -208,14 +218,18 @@ def _as_2d(rate) -> Tuple[np.ndarray, bool]:
 
 
 def allan_sums(rate, dt: float, m: np.ndarray, channels: Optional[Sequence[str]] = None,
-               use_numba: bool = True) -> AllanSums:
-    """Accumulate S(m) and counts of a uniformly sampled, gap-free (n,) or (n, C) array."""
+               use_numba: bool = True, x: Optional[np.ndarray] = None) -> AllanSums:
+    """
+    Accumulate S(m) and counts of a uniformly sampled, gap-free (n,) or (n, C) array.
+
+    ``x``: ``phase(rate, dt)`` (2-D) if the caller already has it (it is not recomputed).
+    """
     rate2, _ = _as_2d(rate)
     n, nc = rate2.shape
     if not dt > 0 or not np.isfinite(dt):
         raise InputError(f'sample interval must be > 0, got {dt}')
     m = np.asarray(m, dtype=np.int64)
-    x = phase(rate2, dt)
+    x = phase(rate2, dt) if x is None else x
     sums = np.zeros((m.size, nc))
     ok = 2 * m <= n
     workers = min(nc, os.cpu_count() or 1) if use_numba and numba is not None else 1

@@ -162,8 +162,8 @@ def _lag1(x: np.ndarray) -> np.ndarray:
     return _lag1_numpy(x)
 
 
-def alpha_from_acf(rate: np.ndarray, m: np.ndarray,
-                   beyond: Optional[np.ndarray] = None) -> np.ndarray:
+def alpha_from_acf(rate: np.ndarray, m: np.ndarray, beyond: Optional[np.ndarray] = None,
+                   csum: Optional[np.ndarray] = None) -> np.ndarray:
     """
     Return the integer noise exponent alpha per (m, channel) from lag-1 autocorrelation.
 
@@ -173,12 +173,16 @@ def alpha_from_acf(rate: np.ndarray, m: np.ndarray,
     identify anything: there ``beyond`` (K, C) is used if given (e.g. ``alpha_from_slope`` of
     the curve), else the largest identifiable m's alpha is carried forward. At most the first
     100 000 averages are used; alpha 1 or 2 needs at least 1000 (else capped at 0).
+
+    ``csum`` (n + 1, C): the cumulative sum of the mean-removed rate from 0, at any positive
+    scale (the ACF is scale-free), e.g. ``gyro_char.allan.phase(rate, dt)``; computed if None.
     """
     rate = np.asarray(rate, dtype=np.float64)
     rate2 = rate[:, None] if rate.ndim == 1 else rate
     # One cumulative sum serves every m: block means are differences of it, O(n / m) each.
-    csum = np.zeros((rate2.shape[0] + 1, rate2.shape[1]))
-    np.cumsum(rate2 - rate2.mean(axis=0), axis=0, out=csum[1:])
+    if csum is None:
+        csum = np.zeros((rate2.shape[0] + 1, rate2.shape[1]))
+        np.cumsum(rate2 - rate2.mean(axis=0), axis=0, out=csum[1:])
     out = np.zeros((m.size, rate2.shape[1]), dtype=np.int64)
     last = np.zeros(rate2.shape[1], dtype=np.int64)
     for k, mm in enumerate(m):

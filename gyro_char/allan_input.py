@@ -17,8 +17,8 @@ de-duplicated, NaN rows dropped, all counted in ``notes``) this module decides:
 """
 from typing import List, Optional, Sequence, Tuple
 
-from gyro_char.allan import (allan_sums, AllanResult, m_grid, POINTS_PER_OCTAVE, pool,
-                             taus_to_m)
+from gyro_char.allan import (allan_sums, AllanResult, m_grid, phase, POINTS_PER_OCTAVE,
+                             pool, taus_to_m)
 from gyro_char.allan_edf import add_confidence, alpha_from_acf, alpha_from_slope
 from gyro_char.recordings import ACCEL_CHANNELS, GYRO_CHANNELS, InputError, Recording
 import numpy as np
@@ -93,7 +93,9 @@ def compute(rec: Recording, channels: Optional[Sequence[str]] = None,
     if missing:
         raise InputError(f'{source}: no channel(s) {missing}; present: {sorted(rec.channels)}')
     dt, segs, notes = uniform_segments(rec.t, source)
-    data = np.stack([rec.channels[c] for c in names], axis=1)
+    data = np.empty((rec.t.size, len(names)), order='F')  # channels contiguous, as the kernel
+    for c, name in enumerate(names):
+        data[:, c] = rec.channels[name]
     if not np.all(np.isfinite(data)):
         raise InputError(f'{source}: NaN/Inf samples reached the Allan variance')
     const = [c for c, col in zip(names, data.T) if np.ptp(col) == 0.0]
@@ -106,10 +108,13 @@ def compute(rec: Recording, channels: Optional[Sequence[str]] = None,
                          f'variance needs at least {MIN_SAMPLES}')
     m = (m_grid(longest, points_per_octave, m_max) if taus is None
          else taus_to_m(taus, dt, longest))
-    parts = [allan_sums(data[a:b], dt, m, names) for a, b in segs if b - a >= 2]
+    a, b = max(segs, key=lambda s: s[1] - s[0])
+    x_long = phase(data[a:b], dt)  # shared by the sums and the noise identification
+    parts = [allan_sums(data[s0:s1], dt, m, names, x=x_long if (s0, s1) == (a, b) else None)
+             for s0, s1 in segs if s1 - s0 >= 2]
     sums = pool(parts)
     sums.notes = list(rec.notes) + notes
     res = sums.result()
-    a, b = max(segs, key=lambda s: s[1] - s[0])
-    alpha = alpha_from_acf(data[a:b], res.m, beyond=alpha_from_slope(res.tau, res.avar))
+    alpha = alpha_from_acf(data[a:b], res.m, beyond=alpha_from_slope(res.tau, res.avar),
+                           csum=x_long)
     return add_confidence(res, alpha)
