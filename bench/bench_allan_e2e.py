@@ -79,8 +79,9 @@ def main() -> None:
                  f'--out {os.path.dirname(args.bag)} --quiet')
     with tempfile.TemporaryDirectory() as tmp:
         ours(args.bag, tmp)  # warm-up: page cache and numba cache, as a user's second run
+        load = os.getloadavg()[0]
         wall, cpu = ours(args.bag, tmp)
-    print(f'load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores')
+    print(f'load average (1 min) before the timed run: {load:.1f} on {os.cpu_count()} cores')
     print(f'ours  gyro-char allan          wall {wall:7.1f} s  CPU {cpu:7.1f} s  '
           f'(target <= 15 s wall)')
     stages = peer(args.bag, args.subset)
