@@ -101,7 +101,9 @@ def estimate_swing(imu: Recording, encoder: Optional[Recording], period_s: float
         if res.noise_estimated:
             unit = 'rad' if what == 'encoder' else 'rad/sqrt(s)'
             notes.append(f'{what} noise estimated from the fit residuals: {res.noise:.3g} {unit}')
-    gain = trapezoid_gain(np.diff(al.tau_gyro), period_s)
+    steps = np.diff(al.tau_gyro)  # released gaps (swing_batch) take no part in the gain
+    gain = trapezoid_gain(steps[steps <= swing_batch.GAP_RELEASE_FACTOR * np.median(steps)],
+                          period_s)
     notes.append(f'gyro amplitude divided by the trapezoid-integration gain at the period, '
                  f'{gain:.9f}')
     est = combine(enc, gyr, period_s, notes, gyro_gain=gain)
