@@ -58,9 +58,11 @@ def test_nan_samples(run):
 
 def test_large_gaps(run):
     imu, enc = run
+    # An IMU gap is bridged by releasing the gyro angle offset (test_swing_gaps.py), noted.
     keep = (imu.t < imu.t[0] + 4.0) | (imu.t > imu.t[0] + 4.2)
     gappy = Recording(imu.t[keep], {k: v[keep] for k, v in imu.channels.items()})
-    _raises('IMU: gap of 0.20', gappy, enc)
+    notes = estimate_swing(gappy, enc, T).estimates.notes
+    assert any(n.startswith('imu: 1 gaps > 3.5 sample intervals (longest 0.20') for n in notes)
     keep = (enc.t < enc.t[0] + 4.0) | (enc.t > enc.t[0] + 5.0)
     _raises('encoder: gap of 1.00', imu,
             Recording(enc.t[keep], {'encoder': enc.channels['encoder'][keep]}))
