@@ -2,8 +2,9 @@
 # motion during a gap is unknown, so the integrated gyro angle after it carries an unknown
 # offset. The filter must release that offset (and count the gap), not integrate across it.
 from gyro_char.bench_sim import simulate_swing
-from gyro_char.recordings import ENCODER_CHANNEL
+from gyro_char.recordings import ENCODER_CHANNEL, Recording
 from gyro_char.swing_batch import GAP_RELEASE_FACTOR
+from gyro_char.swing_kf import estimate_swing
 from gyro_char.swing_mc import study_config
 from gyro_char.swing_online import SwingOnline
 import numpy as np
@@ -46,6 +47,30 @@ def test_online_estimates_within_4_sigma_across_gaps(study, seed):
     assert e.noise_gyro_arw == pytest.approx(sim.truth['channels']['gyro_x']['N'], rel=0.1)
     assert on.gaps_released == 10
     assert any(n.startswith('imu: 10 gaps') for n in e.notes), e.notes
+
+
+def test_batch_path_releases_the_same_gaps_as_the_online_one():
+    # gyro-char swing (batch) on the same gappy record: same treatment, same answer.
+    cfg, sim, t, rate = _gappy('fog', 22)
+    res = estimate_swing(Recording(t, {'gyro_x': rate}), sim.encoder, cfg.stand.period_s)
+    on = _run_online(cfg, sim, t, rate)
+    # Same reference epoch for both: the online filter starts at the first stamp seen.
+    on_al = SwingOnline(cfg.stand.period_s, t_ref=res.aligned.t_ref)
+    al = res.aligned
+    ti, te = al.t_ref + al.tau_gyro, al.t_ref + al.tau_encoder
+    for lo in range(0, ti.size, 997):
+        on_al.add_imu(ti[lo:lo + 997], al.rate_gyro[lo:lo + 997])
+    for lo in range(0, te.size, 1500):
+        on_al.add_encoder(te[lo:lo + 1500], al.angle_encoder[lo:lo + 1500])
+    e_b, e_o = res.estimates, on_al.estimates()
+    tr = sim.truth['swing']
+    assert on.gaps_released == on_al.gaps_released == 10
+    assert any(n.startswith('imu: 10 gaps') for n in e_b.notes), e_b.notes
+    for key in ('scale_factor_error', 'bias', 'bias_drift'):
+        b, o = getattr(e_b, key), getattr(e_o, key)
+        assert abs(b.value - tr[key]) < 4.0 * b.sigma, (key, b, tr[key])
+        assert o.value == pytest.approx(b.value, rel=1e-6, abs=1e-3 * b.sigma)
+        assert o.sigma == pytest.approx(b.sigma, rel=1e-3)
 
 
 def test_short_gaps_stay_integrated():
