@@ -6,6 +6,7 @@ from gyro_char.recordings import ENCODER_CHANNEL, Recording
 from gyro_char.swing_batch import GAP_RELEASE_FACTOR
 from gyro_char.swing_kf import estimate_swing
 from gyro_char.swing_mc import study_config
+from gyro_char.swing_model import SwingNoise
 from gyro_char.swing_online import SwingOnline
 import numpy as np
 import pytest
@@ -23,8 +24,8 @@ def _gappy(study, seed, n_gaps=10, lo_s=0.05, hi_s=0.5):
     return cfg, sim, t[keep], rate[keep]
 
 
-def _run_online(cfg, sim, t, rate):
-    on = SwingOnline(cfg.stand.period_s)
+def _run_online(cfg, sim, t, rate, noise=None):
+    on = SwingOnline(cfg.stand.period_s, noise=noise)
     te, ye = sim.encoder.t, sim.encoder.channels[ENCODER_CHANNEL]
     for lo in range(0, t.size, 997):
         on.add_imu(t[lo:lo + 997], rate[lo:lo + 997])
@@ -47,6 +48,13 @@ def test_online_estimates_within_4_sigma_across_gaps(study, seed):
     assert e.noise_gyro_arw == pytest.approx(sim.truth['channels']['gyro_x']['N'], rel=0.1)
     assert on.gaps_released == 10
     assert any(n.startswith('imu: 10 gaps') for n in e.notes), e.notes
+    # With the gyro noise given (the node's noise parameters), the sigmas do not grow with the
+    # residuals: the estimates themselves must be right.
+    known = SwingNoise(gyro_arw=sim.truth['channels']['gyro_x']['N'])
+    e = _run_online(cfg, sim, t, rate, noise=known).estimates()
+    for key in ('scale_factor_error', 'bias', 'bias_drift'):
+        est = getattr(e, key)
+        assert abs(est.value - tr[key]) < 4.0 * est.sigma, (key, est, tr[key])
 
 
 def test_batch_path_releases_the_same_gaps_as_the_online_one():
