@@ -46,8 +46,11 @@ SEPARATING_RUNS = {
     frozenset({'temperature_drift', 'bias_instability'}):
         'a repeat static record after a full warm-up (or with the temperature logged)',
     frozenset({'time_delay', 'g_sensitivity'}):
-        'swing runs at two periods (or two amplitudes): a delay gives an in-phase angle '
-        'residual growing with frequency, g-sensitivity one set by the tilt, not the period',
+        'repeat at a second period or amplitude: the residual of a delay scales with A·ω, that '
+        'of g-sensitivity with the gravity projection, independent of ω',
+    frozenset({'scale_factor_asymmetry', 'scale_factor_nonlinearity'}):
+        'repeat at a second amplitude: the 2f line of an asymmetry grows as the peak rate, that '
+        'of a quadratic term as its square',
     frozenset({'vibration', 'gauss_markov'}):
         'a longer record with finer frequency resolution: a tone keeps a constant width, a '
         'resonant process does not',

@@ -76,6 +76,8 @@ class InternalLowpass(Effect):
 
     @staticmethod
     def _filter(h, x):
+        if h.size == 1:  # taps = 1: the identity (lfilter_zi needs a kernel of 2 or more)
+            return x * h[0]
         # Start in steady state on the first sample so there is no start-up transient.
         zi = signal.lfilter_zi(h, [1.0])[None, :] * x[:, :1]
         y, _ = signal.lfilter(h, [1.0], x, axis=1, zi=zi)

@@ -1,5 +1,5 @@
 """
-``gyro-char diagnose --kind static INPUT...``: where the sim-to-real gap lies and what explains it.
+``gyro-char diagnose --kind KIND INPUT...``: where the sim-to-real gap lies and what explains it.
 
 Fits the paper's baseline model to each gyro channel of the input record(s), compares them with
 repeated simulated twins on a battery of observables, ranks the catalogue effects and adds them
@@ -8,6 +8,8 @@ with the largest baseline gap at the top level, every channel under the extra ``
 field) and ``diagnosis_<channel>.png`` in ``--out``. ``--holdout INPUT`` re-measures, on a
 record the fit never saw, the gap of the baseline and of the baseline + the selected effects
 with their parameters fixed (only the baseline's white-noise level is refitted).
+``--kind swing`` diagnoses one swing record (IMU + encoder, ``--period`` or the encoder's
+dominant period) against twins of the paper's swing model (``gyro_char.diag_swing``).
 """
 import json
 import os
@@ -34,6 +36,12 @@ def register(subparsers) -> None:
                    help='analyse the first N samples of each record (default 131072)')
     p.add_argument('--seed', type=int, default=1)
     p.add_argument('--topic', default=None, help='sensor_msgs/Imu topic (bags)')
+    p.add_argument('--period', type=float, default=None, metavar='SECONDS',
+                   help='swing: the swing period (default: the dominant period of the encoder)')
+    p.add_argument('--axis', default=None,
+                   help='swing: gyro axis along the swing axis (default: the one that swings)')
+    p.add_argument('--encoder-topic', default=None,
+                   help='swing: sensor_msgs/JointState topic of the stand encoder (bags)')
     add_common(p, default_out='diagnose_out')
     p.set_defaults(func=run)
 
@@ -65,10 +73,10 @@ def run(args) -> int:
     from gyro_char import diag_static, diagnose
     from gyro_char.report.diagnose import plot_diagnosis
 
-    if args.kind == 'swing':
-        raise InputError('--kind swing is not implemented yet (static only in this version)')
     if args.repeats < 4:
         raise InputError('--repeats must be >= 4 (the gap is judged against their scatter)')
+    if args.kind == 'swing':
+        return run_swing(args)
     recs = [read_imu(p, topic=args.topic, quiet=args.quiet) for p in args.inputs]
     dts = [_dt(r) for r in recs]
     if max(dts) - min(dts) > 1e-6 * max(dts):
@@ -99,6 +107,43 @@ def run(args) -> int:
     with open(os.path.join(args.out, 'diagnosis.json'), 'w') as fh:
         json.dump(result, fh, indent=2)
     print(f'wrote {args.out}/diagnosis.json and {len(per)} plot(s)')
+    return 0
+
+
+def run_swing(args) -> int:
+    """``--kind swing``: one swing record (IMU + encoder) against its fitted twins."""
+    from gyro_char import diag_swing, diagnose
+    from gyro_char.recordings import read_encoder
+    from gyro_char.report.diagnose import plot_diagnosis
+    from gyro_char.swing_align import dominant_period
+
+    if len(args.inputs) != 1 or args.holdout:
+        raise InputError('--kind swing takes one record (IMU + encoder) and no --holdout')
+    imu = read_imu(args.inputs[0], topic=args.topic, quiet=args.quiet)
+    enc = read_encoder(args.inputs[0], topic=args.encoder_topic, quiet=args.quiet)
+    for r in (imu, enc):
+        for note in r.notes:
+            print(f'note: {r.source}: {note}', file=sys.stderr)
+    period = args.period
+    if period is None:
+        if len(enc) < 16:
+            raise InputError('no encoder samples to find the swing period from; give --period')
+        period = dominant_period(enc.t - enc.t[0], enc.channels['encoder'])
+        print(f'note: swing period {period:.4g} s (dominant period of the encoder)',
+              file=sys.stderr)
+    problem = diag_swing.swing_problem(imu, enc, period, axis=args.axis,
+                                       max_samples=args.max_samples)
+    diag = diagnose.run(problem, repeats=args.repeats, seed=args.seed, quiet=args.quiet)
+    out = diag.to_json()
+    ch = f'gyro_{problem.context.axis}'
+    out['channel'] = ch
+    os.makedirs(args.out, exist_ok=True)
+    plot_diagnosis(diag, problem.ranges[0], os.path.join(args.out, f'diagnosis_{ch}.png'),
+                   title=f'{ch}: swing sim-to-real gap (period {period:.4g} s)')
+    with open(os.path.join(args.out, 'diagnosis.json'), 'w') as fh:
+        json.dump(out, fh, indent=2)
+    print(summary(ch, out))
+    print(f'wrote {args.out}/diagnosis.json and diagnosis_{ch}.png')
     return 0
 
 

@@ -17,14 +17,21 @@ TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
           'psd': 'PSD (log10 (rad/s)²/Hz) vs f (Hz)',
           'tone': 'tone prominence (log10) vs band centre (Hz)',
           'acf': 'autocorrelation vs lag (samples)',
-          'drift': 'early mean − late mean (rad/s) vs span (s)'}
-LOG_X = {'adev', 'psd', 'drift'}
+          'drift': 'early mean − late mean (rad/s) vs span (s)',
+          'in_phase': 'swing residual: sin θ component (rad)',
+          'quadrature': 'swing residual: cos θ component (rad)',
+          'harmonic_2f': 'swing residual 2θ: sin (0), cos (1) (rad)',
+          'harmonic_3f': 'swing residual 3θ: sin (0), cos (1) (rad)',
+          'residual_psd': 'residual rate PSD (log10 (rad/s)²/Hz) vs f (Hz)'}
+LOG_X = {'adev', 'psd', 'drift', 'residual_psd'}
 
 
 def _x(block: str, ranges: np.ndarray) -> np.ndarray:
     lo, hi = ranges[:, 0], ranges[:, 1]
-    if block == 'psd':
+    if block in ('psd', 'residual_psd'):
         return np.sqrt(lo * hi)
+    if block.startswith('harmonic'):
+        return np.arange(lo.size, dtype=float)
     if block == 'drift':
         return hi
     return 0.5 * (lo + hi)
