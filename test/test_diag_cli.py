@@ -57,7 +57,7 @@ def test_diagnose_static_finds_an_unannounced_tone_and_writes_the_contract(tmp_p
 
 
 @pytest.mark.parametrize('args, message', [
-    (['--kind', 'swing'], 'not implemented'),
+    (['--kind', 'swing', '--period', '5'], 'encoder'),
     (['--kind', 'static'], 'too short'),
 ])
 def test_diagnose_refuses_with_a_one_line_reason(tmp_path, capsys, args, message):
@@ -66,3 +66,30 @@ def test_diagnose_refuses_with_a_one_line_reason(tmp_path, capsys, args, message
     rc = main(['diagnose', *args, str(csv), '--out', str(tmp_path / 'o'), '--quiet'])
     err = capsys.readouterr().err
     assert rc == 2 and message in err and len(err.strip().splitlines()) == 1
+
+
+def test_diagnose_swing_writes_the_contract_and_names_the_delay(tmp_path):
+    rec = tmp_path / 'rec'
+    cfg = tmp_path / 'g200.yaml'
+    cfg.write_text('gyro: {rate_hz: 200.0}\n')
+    assert main(['simulate', 'swing', '--out', str(rec), '--duration', '60', '--config',
+                 str(cfg), '--effect', 'time_delay:delay_s=0.00185', '--quiet']) == 0
+    out = tmp_path / 'out'
+    rc = main(['diagnose', '--kind', 'swing', str(rec / 'recording.mcap'), '--out', str(out),
+               '--repeats', '5', '--quiet'])
+    assert rc == 0
+    d = json.loads((out / 'diagnosis.json').read_text())
+    assert CONTRACT <= set(d)
+    assert d['kind'] == 'swing' and d['channel'] == 'gyro_x'
+    assert d['where'][0]['observable'] == 'quadrature'
+    assert d['where'][0]['range'] == pytest.approx([0.2, 0.2], rel=1e-4)
+    assert d['where'][0]['range_unit'] == 'Hz'
+    # On one period and amplitude a delay and g-sensitivity leave the same residual: the two
+    # lead the ranking (in either order) and the step says so, with the separating run.
+    pair = {'time_delay', 'g_sensitivity'}
+    assert {r['effect'] for r in d['ranking'][:2]} == pair
+    assert d['selected_effects'][0] in pair
+    assert set(d['ambiguous'][0]['effects']) == pair
+    assert 'second period' in d['ambiguous'][0]['separating_run']
+    assert d['baseline']['period_s']['value'] == pytest.approx(5.0, rel=1e-3)
+    assert (out / 'diagnosis_gyro_x.png').stat().st_size > 10_000
