@@ -4,9 +4,9 @@ N and B of the real ADIS16405 static records, per axis, against the paper and th
 Reads ``../shared/data/adis16405/*.csv.gz`` (never copied into the repository) and prints, per
 record and gyro axis: the lag-1 autocorrelation of the samples, sigma(1 s) (the usual
 read-off of N), the flat floor min sigma / 0.664 (the read-off of B), and the fitted N, B of
-formula (4) (``--fit``, default the paper's L1 objective) over all taus and over tau >= 1 s (clear of the sensor's
-internal averaging filter), sigma(0.01 s) x sqrt(0.01 s) (the N one would read off inside the
-filtered region) and the strongest spectral line above 5 Hz.
+formula (4) (``--fit``, default the paper's L1 objective) over all taus and over tau >= 1 s
+(clear of the sensor's internal averaging filter), sigma(0.01 s) x sqrt(0.01 s) (the N one
+would read off inside the filtered region) and the strongest spectral line above 5 Hz.
 
     python bench/allan_adis16405.py [--boot 50] [--fit l1w]
 """

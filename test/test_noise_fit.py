@@ -1,4 +1,5 @@
 """IEEE 952 fit: exact on model curves, the L1 optimum, term selection, recovery on synthetics."""
+from gyro_char.allan_edf import chi2_interval
 from gyro_char.allan_input import compute
 from gyro_char.noise_fit import _L1Step, _objective, fit_l1, fit_noise, fit_result
 from gyro_char.noise_gen import generate
@@ -94,3 +95,57 @@ def test_recovery_on_synthetic_records(method, synthetic_results):
         assert not fit.terms['R'].resolved  # 1e-8 rad/s^2 is invisible in 2 h
     med = {t: np.median([abs(e[t]) for e in errs]) for t in truth}
     assert med['N'] <= 0.03 and med['Q'] <= 0.03 and med['K'] <= 0.2 and med['B'] <= 0.3, med
+
+
+@pytest.mark.parametrize('truth', [{'N': 1e-3}, {'N': 1e-3, 'B': 2e-4}],
+                         ids=['white', 'white+flicker'])
+def test_selection_drops_absent_terms(truth):
+    # 1 h at 50 Hz: terms the record does not hold are eliminated (coefficient 0) and never
+    # reported resolved; the present ones are kept and resolved. Elimination is a one-sided
+    # 5 % test per term, so a rare chance keep is allowed: at most 1 of the 27-36 cases.
+    dt, n = 0.02, 180_000
+    kept = []
+    for seed in range(3):
+        rate = generate(n, dt, rng=np.random.default_rng(10 + seed), **truth)
+        res = compute(Recording(np.arange(n) * dt, {'gyro_x': rate}))
+        for method in ('l1', 'l1w', 'weighted'):
+            fit = fit_result(res, method=method, n_boot=20, seed=seed)['gyro_x']
+            for t in TERMS:
+                if t in truth:
+                    assert fit.terms[t].resolved, (seed, method, t)
+                    assert fit.fitted[t] == pytest.approx(truth[t], rel=0.3), (seed, method, t)
+                else:
+                    assert not fit.terms[t].resolved, (seed, method, t)
+                    if fit.fitted[t] != 0.0:
+                        kept.append((seed, method, t))
+    assert len(kept) <= 1, kept
+
+
+@pytest.fixture(scope='module')
+def adis_session1(adis_records):
+    from gyro_char.recordings import read_imu
+    rec = read_imu(str(adis_records[0]), quiet=True)
+    return compute(rec, ['gyro_x', 'gyro_y', 'gyro_z'])
+
+
+@pytest.mark.parametrize('method', ['l1', 'l1w'])
+def test_selected_model_follows_the_real_adis16405_curve(method, adis_session1):
+    # Regression: formula (4) misfits the ADIS16405 below ~1 s (internal averaging filter, a
+    # 20 Hz tone on Z), and selection by the correlated chi-square then kept only N on Z,
+    # its curve 600x under the measured Allan variance at 2600 s. B (the flat floor, plainly
+    # visible) must be resolved on every axis, and the selected model of the paper's
+    # objective must follow the curve within a factor 2 (or the 95 % interval where that is
+    # looser) for tau >= 1 s. 'l1w' is held to that on X and Z only: on Y it judges K a
+    # 1.9 sigma term (below GAIN_MIN) and drops it, 4-8x under the last 8 points (EDF 2-4).
+    res = adis_session1
+    for c, (name, fit) in enumerate(fit_result(res, method=method, n_boot=20).items()):
+        assert fit.terms['B'].resolved, (name, fit.to_json())
+        if method == 'l1w' and name == 'gyro_y':
+            continue
+        sel = fit.tau >= 1.0
+        model = model_avar(fit.tau, fit.coeffs())[sel]
+        avar, edf = fit.avar[sel], res.edf[:, c][res.avar[:, c] > 0][fit.tau >= 1.0]
+        lo, hi = chi2_interval(np.sqrt(avar), edf, 0.95)
+        ok = ((model >= np.minimum(avar / 2.0, lo ** 2))
+              & (model <= np.maximum(avar * 2.0, hi ** 2)))
+        assert np.all(ok), (name, fit.tau[sel][~ok], (avar / model)[~ok])
