@@ -223,9 +223,14 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
     w = 2.0 * np.pi / base.period_s
     rate = base.amplitude * w                       # peak swing rate, rad/s
     sig = base.N / np.sqrt(base.duration)           # rate noise averaged over the record
+    # Quadrature noise of the angle residual at the swing frequency (random-walk angle of PSD
+    # N^2 / w^2 projected over the record): a delay and a g-sensitivity are searched over
+    # the same span of quadrature amplitudes, so neither is favoured by its grid.
+    q = base.N / w * np.sqrt(2.0 / base.duration)
     return [
-        EffectSpace('time_delay', [Param('delay_s', 0.02 * base.dt, 4.0 * base.dt)]),
-        EffectSpace('g_sensitivity', [Param('gy', 0.03 * sig / G0, 300.0 * sig / G0)]),
+        EffectSpace('time_delay', [Param('delay_s', 0.5 * q / rate, 200.0 * q / rate)]),
+        EffectSpace('g_sensitivity', [Param('gy', 0.5 * q * w / (G0 * base.amplitude),
+                                            200.0 * q * w / (G0 * base.amplitude))]),
         EffectSpace('scale_factor_nonlinearity', [
             Param('k2', 0.03 * sig / rate ** 2, 300.0 * sig / rate ** 2),
             Param('k3', 0.03 * sig / rate ** 3, 300.0 * sig / rate ** 3)]),
