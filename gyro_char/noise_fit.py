@@ -31,24 +31,41 @@ Term selection (``_Fitter.select``): backward elimination judged by the estimato
 objective S (the L1 sum for 'l1'/'l1w', the weighted sum of squares for 'weighted'), so the
 selection is consistent with the fit. Dropping term j (refitting the rest) raises S by dS_j.
 Under the null "j is absent" and a correct model, local asymptotics give dS_j ~ c_j chi2_1
-(a chi-bar-square: z_j >= 0 sits on the boundary), with c_j computed from the linearised fit:
+(a chi-bar-square: z_j >= 0 sits on the boundary), with c_j from the linearised fit:
 x = d ln p / d z_j residualised on the other kept terms, and for L1 (Koenker-Bassett)
 c_j = Var(sum w x sign e) / (4 sum w f x^2), f = 1 / (sqrt(2 pi) sd) the density of a log
-residual at its median, for least squares c_j = Var(sum w x e) / sum w x^2; the variances
-use the correlation between taus of ``allan_cov`` (the sign correlation of a Gaussian copula
-is (2/pi) arcsin rho), which matters: neighbouring taus are 0.9+ correlated, so a chance
-improvement is ~10-30x larger than with independent points. Real curves need not follow
-formula (4) (the ADIS16405's internal averaging filter and a 20 Hz tone bend the short-tau
-end): such misfit inflates every residual, so, as in quasi-likelihood / an F test, dS_j is
-judged against the dispersion phi = max(1, S_full / E S_full) of the full model, with E S the
-objective expected from pure estimation noise (sum w sd sqrt(2/pi) (n-p)/n for L1, n - p for
-least squares). A term stays when dS_j >= ``GAIN_MIN`` phi c_j (about 2 sigma) and it makes up
-at least ``SHARE_MIN`` of p^2 at some fitted tau; and whatever the statistics say, no drop is
-accepted that leaves the objective above (1 + ``REL_MAX``) x the full model's (a term whose
-removal doubles the misfit is visibly present). (The earlier rule, backward elimination on the
-correlated chi-square, measured a criterion the L1 fit does not minimise: on the ADIS16405 Z
-gyro, where chi2/dof ~ 1000 from the short-tau misfit, dropping B and K *lowered* the
-chi-square while the L1 objective rose 20x, and the reported curve missed the data by 600x.)
+residual at its median; for least squares c_j = Var(sum w x e) / sum w x^2. The variances use
+the correlation between taus of ``allan_cov`` (for signs, (2/pi) arcsin rho), which matters:
+neighbouring taus are 0.9+ correlated, so a chance improvement is ~10-30x larger than with
+independent points (on simulated records without R and Q, dS / c of those terms came out
+0.1-3.3, as a chi2_1 should).
+
+Misfit. Real curves need not follow formula (4): the ADIS16405's internal averaging filter
+and a 20 Hz tone bend the short-tau end, where the points have 1e4-1e5 degrees of freedom, so
+the objective there is 10-100x what noise explains. As in quasi-likelihood / an F test, the
+drop is judged against the dispersion phi = S_full / E S of the full model (E S the objective
+expected from estimation noise alone: sd sqrt(2/pi) (n-p)/n per point for L1, (n-p)/n for
+least squares), but locally: phi_k per point (its term of S over the expected one, pooled over
+the correlated neighbours with weights rho, floored at 1), entering c_j where the misfit acts
+(L1: the residual density f_k -> f_k / phi_k; least squares: var e_k -> phi_k var e_k). A
+single global phi is dominated by the filtered short taus and made B and K on the Z gyro look
+insignificant against it; the local one judges a long-tau term by the long-tau scatter.
+A term stays when dS_j >= ``GAIN_MIN`` c_j (chi-bar-square ~2.3 % tail) and it makes up at
+least ``SHARE_MIN`` of p^2 at some fitted tau. Backstop: a drop that is significant against
+pure noise (phi = 1) and raises S by more than ``REL_MAX`` x max(S, E S) over the taus where
+the term holds ``SHARE_MIN`` of the curve, or doubles S overall, is never accepted (a term
+whose removal visibly breaks the fit is present, whatever phi says). (The earlier rule,
+elimination on the correlated chi-square of the log residuals, measured a criterion the L1
+fit does not minimise: on the ADIS16405 Z gyro, chi2/dof ~ 1000 from the short-tau misfit,
+dropping B and K *lowered* it while the L1 objective rose 20x, and the reported curve missed
+the data by 600x at 2600 s.)
+
+K and R are near-collinear at long tau, and a random walk's chance trend looks like a ramp,
+so a ramp is claimed only when the random walk cannot explain the bend: R is dropped first
+when R or K is weak, R never gets the backstop (a ramp beyond K lives in the last octave's
+few degrees of freedom, where a 50 % local rise is within chance), and a term at zero in the
+full fit does not re-enter when another is dropped, except K taking over from R.
+
 The kept terms are refitted and bootstrapped; a kept term is ``resolved`` when its interval
 also excludes zero by a margin (lower bound > ``LO_MIN`` x value). Otherwise the record does
 not support it and the reported value is an upper bound: the largest coefficient for which the
