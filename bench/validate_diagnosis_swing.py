@@ -10,7 +10,9 @@ shapes that differ from the catalogue's (``gyro_char.effects_*``), and the diagn
 - g_sensitivity: g_y f_y + g_z (f_z - g) from the stand angle (catalogue searches g_y alone);
 - scale_factor_nonlinearity: a soft saturation S tanh(ω / S) (catalogue: k2 ω² + k3 ω³);
 - scale_factor_asymmetry: a ω tanh(ω / 0.05 rad/s), a smoothed |ω| (catalogue: a |ω|);
-- timestamp_jitter: uniformly distributed IMU stamp errors (catalogue: Gaussian);
+- timestamp_jitter: uniformly distributed encoder stamp errors (catalogue: Gaussian). IMU
+  stamp errors are not used: the residual is blind to them to first order (the integrated
+  angle and the encoder read at the same wrong stamp are off by the same rate x error);
 - encoder_cyclic_error: a first + third harmonic error on 1000 lines per turn (catalogue:
   first + second harmonic on 2048 lines).
 
@@ -65,16 +67,12 @@ def smooth_asym(t, x, phi, rate, rng, a):
     return t, x + a * rate * np.tanh(rate / 0.05)
 
 
-def uniform_jitter(t, x, phi, rate, rng, half_width):
-    return t + rng.uniform(-half_width, half_width, t.size), x
-
-
 SHAPES = {
     'time_delay': (lagrange_delay, [{'samples': 0.23}, {'samples': 0.61}]),
     'g_sensitivity': (g_both, [{'gy': 2e-4, 'gz': 5e-5}, {'gy': 5e-4, 'gz': 1e-4}]),
     'scale_factor_nonlinearity': (saturation, [{'s': 1.3}, {'s': 0.9}]),
     'scale_factor_asymmetry': (smooth_asym, [{'a': 3e-3}, {'a': 8e-3}]),
-    'timestamp_jitter': (uniform_jitter, [{'half_width': 4e-4}, {'half_width': 1e-3}]),
+    'timestamp_jitter': (None, [{'half_width': 1e-4}, {'half_width': 3e-4}]),
     'encoder_cyclic_error': (None, [{'a1': 5e-5, 'a3': 2e-5}, {'a1': 2e-4, 'a3': 5e-5}]),
 }
 
@@ -92,6 +90,10 @@ def make_record(name, level, seed):
         phi = enc.channels[ENCODER_CHANNEL]
         e = phi + p['a1'] * np.sin(1000 * phi + 0.4) + p['a3'] * np.sin(3000 * phi + 1.1)
         return imu, Recording(enc.t, {ENCODER_CHANNEL: e}, enc.source)
+    if name == 'timestamp_jitter':
+        w = levels[level]['half_width']
+        return imu, Recording(enc.t + rng.uniform(-w, w, enc.t.size),
+                              dict(enc.channels), enc.source)
     phi, rate = _stand(cfg, imu.t)
     t, x = fn(imu.t, imu.channels['gyro_x'], phi, rate, rng, **levels[level])
     return Recording(t, {'gyro_x': x}, imu.source), enc

@@ -239,8 +239,12 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         EffectSpace('encoder_cyclic_error', [Param('a1', 0.1 * base.encoder_sigma + 1e-9,
                                                    30.0 * base.encoder_sigma + 1e-7)],
                     fixed={'a2': 0.0}),
-        EffectSpace('timestamp_jitter', [Param('sigma_s', 0.01 * base.dt, 0.4 * base.dt)],
-                    fixed={'stream': 0.0}),
+        # Both streams: an IMU stamp error alone leaves no first-order trace here (the gyro
+        # angle and the encoder read at the same wrong stamp move together); an encoder
+        # stamp error shows as residual angle noise rate x error.
+        EffectSpace('timestamp_jitter', [Param('sigma_s', 0.01 * base.encoder_dt,
+                                               0.4 * base.encoder_dt)],
+                    fixed={'stream': 2.0}),
     ]
 
 
