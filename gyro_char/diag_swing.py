@@ -39,7 +39,6 @@ from scipy import signal
 
 SWING_EFFECTS = ('time_delay', 'g_sensitivity', 'scale_factor_nonlinearity',
                  'scale_factor_asymmetry', 'encoder_cyclic_error', 'timestamp_jitter')
-NUISANCE = 'baseline_white_noise'
 PRESET = 'adis16405'  # structure only: the fitted numbers override what matters
 PSD_BINS = 10
 G0 = 9.80665
@@ -147,7 +146,7 @@ def fit_baseline(imu: Recording, encoder: Recording, period_s: float,
         axis=al.axis.replace('gyro_', ''))
 
 
-def twin_config(base: SwingBaseline, n_scale: float = 1.0) -> BenchConfig:
+def twin_config(base: SwingBaseline) -> BenchConfig:
     """Return the bench simulator's config for a twin: the paper's swing model only."""
     a = base.axis
     ch = f'gyro_{a}'
@@ -160,7 +159,7 @@ def twin_config(base: SwingBaseline, n_scale: float = 1.0) -> BenchConfig:
                  'quantizer': 'round', 'misalignment': 0.0,
                  'scale_factor_error': {a: base.scale_factor_error},
                  'bias': {a: base.bias}, 'bias_drift': {a: base.drift}},
-        'noise': {ch: {'N': base.N * n_scale, 'B': 0.0, 'K': 0.0, 'Q': 0.0, 'R': 0.0}},
+        'noise': {ch: {'N': base.N, 'B': 0.0, 'K': 0.0, 'Q': 0.0, 'R': 0.0}},
     })
     cfg.encoder.adc_noise = encoder_white_sigma(base, cfg)
     return cfg
@@ -176,9 +175,9 @@ def twin_effects(effects: Sequence) -> list:
     return out
 
 
-def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int, n_scale: float = 1.0):
+def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
     """IMU and encoder recordings of a twin: the baseline plus ``effects``."""
-    run = bench_sim.simulate_swing(twin_config(base, n_scale), duration=base.duration,
+    run = bench_sim.simulate_swing(twin_config(base), duration=base.duration,
                                    seed=int(seed), effects=twin_effects(effects),
                                    channels=(f'gyro_{base.axis}',))
     return run.imu, run.encoder
@@ -315,19 +314,10 @@ def swing_problem(imu: Recording, encoder: Recording, period_s: float, *,
         base = calibrate_n(base, real, ranges)
 
     def sim(effects: list, seed: int) -> dict:
-        n_scale, fx = 1.0, []
-        for name, params in effects:
-            if name == NUISANCE:
-                n_scale = params['n_scale']
-            else:
-                fx.append((name, params))
-        i, e = simulate_twin(base, fx, seed, n_scale)
-        return _obs(i, e, base, ranges)
+        return _obs(*simulate_twin(base, effects, seed), base, ranges)
 
     spaces = [s for s in swing_spaces(base) if s.name in names]
     spaces = _signs(spaces, real, sim)
     return Problem(kind='swing', reals=[real], simulate=lambda i, fx, s: sim(fx, s),
                    spaces=spaces, ranges=[ranges], units=dict(UNITS),
-                   baseline=base.to_json(),
-                   nuisance=None,
-                   context=base)
+                   baseline=base.to_json(), context=base)
