@@ -25,8 +25,10 @@ generated here too, without the bench simulator. Usage::
 
     python bench/validate_diagnosis.py            # full table (~10-20 min on 2 busy cores)
     python bench/validate_diagnosis.py --quick    # three cases, as in test/test_diag_validation
+    python bench/validate_diagnosis.py --swing    # the swing part (validate_diagnosis_swing.py)
 """
 import argparse
+import os
 import sys
 import time
 
@@ -145,10 +147,18 @@ def cases(quick: bool, seeds):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     ap.add_argument('--quick', action='store_true')
+    ap.add_argument('--swing', action='store_true',
+                    help='run the swing part instead (bench/validate_diagnosis_swing.py)')
     ap.add_argument('--samples', type=int, default=8192)
     ap.add_argument('--repeats', type=int, default=6)
     ap.add_argument('--seeds', type=int, nargs='+', default=[11, 12])
-    args = ap.parse_args(argv)
+    args, rest = ap.parse_known_args(argv)
+    if args.swing:
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import validate_diagnosis_swing
+        return validate_diagnosis_swing.main(rest + (['--quick'] if args.quick else []))
+    if rest:
+        ap.error(f'unrecognized arguments: {" ".join(rest)}')
     rows = []
     t0 = time.time()
     for label, effects, seed in cases(args.quick, args.seeds):
