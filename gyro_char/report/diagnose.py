@@ -30,7 +30,7 @@ def _x(block: str, ranges: np.ndarray) -> np.ndarray:
     lo, hi = ranges[:, 0], ranges[:, 1]
     if block in ('psd', 'residual_psd'):
         return np.sqrt(lo * hi)
-    if block.startswith('harmonic'):
+    if block.startswith('harmonic') or block in ('in_phase', 'quadrature'):
         return np.arange(lo.size, dtype=float)
     if block == 'drift':
         return hi
@@ -40,6 +40,10 @@ def _x(block: str, ranges: np.ndarray) -> np.ndarray:
 def _band(ax, x, repeats: List[Dict[str, np.ndarray]], block: str, color: str, label: str):
     stack = np.array([r[block] for r in repeats])
     lo, mid, hi = np.percentile(stack, [16, 50, 84], axis=0)
+    if x.size <= 2:  # a component or two (swing harmonics): points with 16-84 % bars
+        ax.errorbar(x + (0.04 if color == 'C2' else -0.04), mid, yerr=[mid - lo, hi - mid],
+                    fmt='o', color=color, ms=5, capsize=4, label=label)
+        return
     ax.fill_between(x, lo, hi, color=color, alpha=0.25, lw=0)
     ax.plot(x, mid, '-', color=color, lw=1.2, label=label)
 
