@@ -27,6 +27,9 @@ def sim():
 
 
 def _graph(context, **params):
+    # Replays run faster than real time; the 20 kHz flood cap could drop samples on an idle
+    # machine. It has its own test below (max_rate_hz=200), so it is off unless a test sets it.
+    params.setdefault('max_rate_hz', 0.0)
     overrides = [Parameter(k, value=v) for k, v in params.items()]
     node = SwingKfNode(context=context, parameter_overrides=overrides)
     test_node = rclpy.create_node('swing_test_peer', context=context)
