@@ -14,15 +14,7 @@ import time
 import allantools
 from gyro_char.allan import m_grid, numba, overlapping_avar
 import numpy as np
-
-
-def best_of(fn, repeat: int) -> float:
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+from timing import best_of
 
 
 def main() -> None:
@@ -42,10 +34,13 @@ def main() -> None:
     print(f'warm-up (numba compile or cache load): {time.perf_counter() - t0:.2f} s')
 
     ref = allantools.oadev(rate, rate=1.0 / args.dt, data_type='freq', taus=taus)
-    t_ref = best_of(lambda: allantools.oadev(rate, rate=1.0 / args.dt, data_type='freq',
-                                             taus=taus), args.repeat)
-    t_ours = best_of(lambda: overlapping_avar(rate, args.dt, m=m), args.repeat)
-    t_numpy = best_of(lambda: overlapping_avar(rate, args.dt, m=m, use_numba=False), 1)
+
+    def peer():
+        return allantools.oadev(rate, rate=1.0 / args.dt, data_type='freq', taus=taus)
+
+    t_ref, _ = best_of(peer, args.repeat)
+    t_ours, _ = best_of(lambda: overlapping_avar(rate, args.dt, m=m), args.repeat)
+    t_numpy, _ = best_of(lambda: overlapping_avar(rate, args.dt, m=m, use_numba=False), 1)
     _, avar, _ = overlapping_avar(rate, args.dt, m=m)
     diff = float(np.max(np.abs(avar / ref[1] ** 2 - 1.0)))
     print(f'allantools.oadev          : {t_ref:7.3f} s')

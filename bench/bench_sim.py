@@ -18,15 +18,7 @@ import allantools
 from gyro_char.bench_sim import simulate_static, simulate_swing
 from gyro_char.commands.simulate import write_record
 from gyro_char.sim_config import load
-
-
-def _best(fn, repeat):
-    best = float('inf')
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+from timing import best_of
 
 
 def main() -> None:
@@ -44,13 +36,15 @@ def main() -> None:
         noise.generateNoise()
         return noise.time_series
 
-    t_swing = _best(lambda: simulate_swing(cfg, duration=swing_s, seed=1,
-                                           channels=['gyro_x']), 3)
-    t_peer_swing = _best(lambda: peer(n_swing), 3)
+    def swing_gyro_x():
+        return simulate_swing(cfg, duration=swing_s, seed=1, channels=['gyro_x'])
+
+    t_swing, _ = best_of(swing_gyro_x, 3)
+    t_peer_swing, _ = best_of(lambda: peer(n_swing), 3)
     print(f'swing {swing_s:g} s @ {cfg.gyro.rate_hz:g} Hz (gyro_x + encoder, {n_swing} + '
           f'{n_swing} samples): {t_swing:.3f} s; allantools 1/f alone: {t_peer_swing:.3f} s; '
           f'ratio {t_peer_swing / t_swing:.2f}x')
-    t_all = _best(lambda: simulate_swing(cfg, duration=swing_s, seed=1), 1)
+    t_all, _ = best_of(lambda: simulate_swing(cfg, duration=swing_s, seed=1), 1)
     print(f'swing, all 6 IMU channels: {t_all:.3f} s')
     t0 = time.perf_counter()
     run = simulate_static(cfg, duration=static_s, seed=1)
@@ -59,7 +53,7 @@ def main() -> None:
         t0 = time.perf_counter()
         write_record(tmp, run)
         t_bag = time.perf_counter() - t0
-    t_peer_static = _best(lambda: peer(n_static), 1) * 6
+    t_peer_static = best_of(lambda: peer(n_static), 1)[0] * 6
     print(f'static {static_s:g} s @ {cfg.gyro.static_rate_hz:.4g} Hz x 6 channels '
           f'({n_static} samples): simulate {t_static:.2f} s + mcap bag {t_bag:.2f} s = '
           f'{t_static + t_bag:.2f} s; allantools 1/f for 6 channels alone: '

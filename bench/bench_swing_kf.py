@@ -19,7 +19,6 @@ Prints the ratio filterpy / batch (target >= 20) and the batch time (target <= 1
 that filterpy and batch agree on the subset.
 """
 import argparse
-import time
 
 from gyro_char import swing_batch
 from gyro_char.bench_sim import simulate_swing
@@ -28,15 +27,7 @@ from gyro_char.swing_kf import estimate_swing, SwingKalman
 from gyro_char.swing_model import SwingNoise
 from gyro_char.swing_online import SwingOnline
 import numpy as np
-
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), out
+from timing import best_of
 
 
 def main() -> None:
