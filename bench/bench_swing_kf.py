@@ -72,7 +72,7 @@ def main() -> None:
                     np.max(np.abs(a.P - b.P) / np.outer(sd, sd)))
 
     # Online, one sample per call (a node's callbacks), over 60 s of the record.
-    n_on = int(min(60.0, args.duration) * 1000)
+    n_on = min(60_000, len(al.tau_gyro), len(al.tau_encoder))
 
     def online():
         o = SwingOnline(period, noise, t_ref=al.t_ref)
