@@ -133,19 +133,31 @@ def decode_imu(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray
     idx, off, big, a = idx[good], off[good], big[good], a[good]
     ok[:] = False
     ok[idx] = True
-    n = offsets.size
+    t, channels = _stamp_and_rates(buf, offsets.size, idx, off, off + 4 + a, big)
+    return t, channels, ok
+
+
+def _stamp_and_rates(buf: np.ndarray, n: int, idx: np.ndarray, off: np.ndarray,
+                     body: np.ndarray, big: np.ndarray
+                     ) -> Tuple[np.ndarray, Dict[str, np.ndarray]]:
+    """
+    Read the header stamp and the gyro/accel vectors of the accepted messages ``idx``.
+
+    ``off`` is where each accepted payload starts (stamp secs at +4, nsecs at +8, as both the
+    ROS 1 and the CDR layouts put them) and ``body`` where its packed float64 block starts;
+    rejected messages get NaN.
+    """
     t = np.full(n, np.nan)
     sec = _gather(buf, off + 4, 'i4', big).astype(np.float64)
     nsec = _gather(buf, off + 8, 'u4', big).astype(np.float64)
     t[idx] = sec + nsec * 1e-9
     channels = {}
-    body = off + 4 + a
     for base, start in (('gyro', 104), ('accel', 200)):
         for k, axis in enumerate('xyz'):
             values = np.full(n, np.nan)
             values[idx] = _gather(buf, body + start + 8 * k, 'f8', big)
             channels[f'{base}_{axis}'] = values
-    return t, channels, ok
+    return t, channels
 
 
 def _decode_uniform(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray):

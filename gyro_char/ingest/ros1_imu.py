@@ -9,7 +9,7 @@ rosbags' per-message path so both paths accept the same messages.
 """
 from typing import Dict, Tuple
 
-from gyro_char.ingest.cdr import _ascii_frames, _gather, IMU_TAIL
+from gyro_char.ingest.cdr import _ascii_frames, _gather, _stamp_and_rates, IMU_TAIL
 import numpy as np
 
 
@@ -29,15 +29,6 @@ def decode_imu_ros1(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray
     idx, off, strlen, little = idx[good], off[good], strlen[good], little[good]
     ok[:] = False
     ok[idx] = True
-    t = np.full(n, np.nan)
-    sec = _gather(buf, off + 4, 'i4', little).astype(np.float64)  # as rosbags reads it
-    nsec = _gather(buf, off + 8, 'u4', little).astype(np.float64)
-    t[idx] = sec + nsec * 1e-9
-    channels = {}
-    body = off + 16 + strlen
-    for base, start in (('gyro', 104), ('accel', 200)):
-        for k, axis in enumerate('xyz'):
-            values = np.full(n, np.nan)
-            values[idx] = _gather(buf, body + start + 8 * k, 'f8', little)
-            channels[f'{base}_{axis}'] = values
+    # secs read as int32, as rosbags reads it
+    t, channels = _stamp_and_rates(buf, n, idx, off, off + 16 + strlen, little)
     return t, channels, ok
