@@ -20,7 +20,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from gyro_char.allan_live import AllanLive, return_freed_memory
 from gyro_char.checkpoint import load_checkpoint, PeriodicCheckpoint
 from gyro_char.nodes.node_common import (
-    declare, LATCHED_1, Param, publish_status, RELIABLE_10, run_node, sensor_qos,
+    declare, LATCHED_1, Param, publish_input_health, RELIABLE_10, run_node, sensor_qos,
     split_at_markers, validate)
 from gyro_char.recordings import IMU_CHANNELS, InputError
 from gyro_char.stream_health import DROP, RESTART, StreamHealth
@@ -334,9 +334,7 @@ class AllanNode(Node):
 
     def publish_diagnostics(self) -> None:
         """Publish the input health, accumulation state and motion on /diagnostics."""
-        level, message, values = self.health_status()
-        publish_status(self, self.diag_pub, f'{NAME}: inputs', level, message,
-                       self.p['hardware_id'], values)
+        publish_input_health(self, NAME)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
         self._q.clear()

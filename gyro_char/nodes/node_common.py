@@ -157,6 +157,13 @@ def publish_status(node: Any, publisher: Any, name: str, level: int, message: st
                                        [status]))
 
 
+def publish_input_health(node: Any, name: str) -> None:
+    """Publish ``node.health_status()`` as the ``<name>: inputs`` status on ``node.diag_pub``."""
+    level, message, values = node.health_status()
+    publish_status(node, node.diag_pub, f'{name}: inputs', level, message,
+                   node.p['hardware_id'], values)
+
+
 def run_node(factory: Callable[[], Any], name: str,
              errors: Tuple[Type[BaseException], ...] = (InvalidParameter,),
              error_prefix: str = 'invalid parameter: ', spin_fn: Callable[[Any], None] = spin,

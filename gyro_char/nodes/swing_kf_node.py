@@ -13,8 +13,8 @@ from typing import Any, Dict, List
 
 from diagnostic_msgs.msg import DiagnosticArray
 from gyro_char.nodes.node_common import (
-    declare, Param, publish_status, RELIABLE_10, run_node, sensor_qos, split_at_markers,
-    validate)
+    declare, Param, publish_input_health, publish_status, RELIABLE_10, run_node, sensor_qos,
+    split_at_markers, validate)
 from gyro_char.stream_health import DROP, RESTART, stream_skew_s, StreamHealth
 from gyro_char.swing_model import SwingNoise
 from gyro_char.swing_online import SwingOnline
@@ -259,9 +259,7 @@ class SwingKfNode(Node):
 
     def publish_diagnostics(self) -> None:
         """Publish the input health and convergence on ``/diagnostics``."""
-        level, message, values = self.health_status()
-        publish_status(self, self.diag_pub, f'{NAME}: inputs', level, message,
-                       self.p['hardware_id'], values)
+        publish_input_health(self, NAME)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
         self._imu_q.clear()
