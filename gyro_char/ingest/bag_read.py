@@ -7,6 +7,7 @@ iterator, decoded in blocks by ``cdr.decode_imu`` / ``ros1_imu.decode_imu_ros1``
 path (rosbags deserialisation + ``msg_adapters``) serves file-compressed bags and any payload the
 fast path declines; both give identical values. ``encoder_read`` shares ``Bag`` and the sources.
 """
+from contextlib import contextmanager
 import difflib
 from pathlib import Path
 import sqlite3
@@ -36,6 +37,17 @@ READ_ERRORS = (ArithmeticError, AssertionError, AttributeError, EOFError, IndexE
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip()
     return text.splitlines()[0] if text else type(exc).__name__
+
+
+@contextmanager
+def reading(path: Path, topic: str) -> Iterator[None]:
+    """Turn any reader failure inside the block into ``InputError('<path>: cannot read ...')``."""
+    try:
+        yield
+    except InputError:
+        raise
+    except Exception as exc:  # noqa: B902 - READ_ERRORS and rosbags' own errors alike
+        raise InputError(f'{path}: cannot read {topic}: {_first_line(exc)}') from None
 
 
 class Bag:
@@ -319,13 +331,7 @@ def read_imu_bag(path: Path, topic: Optional[str] = None, quiet: bool = False,
     """Read a bag's Imu topic (auto-detected if it is the only one); not yet sanitised."""
     with Bag(path) as bag:
         name = bag.pick(topic, (IMU_TYPE,), 'sensor_msgs/Imu')
-        try:
+        with reading(path, name):
             if fast and (bag.storage() in ('sqlite3', 'mcap') or bag.path.suffix == '.bag'):
                 return _fast_imu(bag, name, quiet)
             return _slow_imu(bag, name, quiet)
-        except InputError:
-            raise
-        except READ_ERRORS as exc:
-            raise InputError(f'{path}: cannot read {name}: {_first_line(exc)}') from None
-        except Exception as exc:  # noqa: B902 - rosbags' reader errors derive from Exception
-            raise InputError(f'{path}: cannot read {name}: {_first_line(exc)}') from None

@@ -8,8 +8,8 @@ rosbags and ``msg_adapters``; other storage goes through rosbags' ``AnyReader``.
 from pathlib import Path
 from typing import Optional, Union
 
-from gyro_char.ingest.bag_read import (_bag_notes, _first_line, _payload_blocks, Bag,
-                                       ENCODER_TYPES, READ_ERRORS)
+from gyro_char.ingest.bag_read import (_bag_notes, _payload_blocks, Bag, ENCODER_TYPES,
+                                       reading)
 from gyro_char.ingest.bag_write import typestore
 from gyro_char.ingest.cdr_scalar import decode_scalar
 from gyro_char.progress import progress
@@ -77,17 +77,11 @@ def read_encoder_bag(path: Path, topic: Optional[str] = None,
                 return joint_angle(msg, 0 if joint is None else joint)
         else:
             sample = vector3_x
-        try:
+        with reading(path, name):
             if fast and bag.storage() in ('sqlite3', 'mcap'):
                 ts, vs, bad, missing = _fast_encoder(bag, name, msgtype, sample, joint, quiet)
             else:
                 ts, vs, bad, missing = _slow_encoder(bag, name, sample, quiet)
-        except InputError:
-            raise
-        except READ_ERRORS as exc:
-            raise InputError(f'{path}: cannot read {name}: {_first_line(exc)}') from None
-        except Exception as exc:  # noqa: B902 - rosbags' reader errors derive from Exception
-            raise InputError(f'{path}: cannot read {name}: {_first_line(exc)}') from None
     t = np.concatenate(ts) if ts else np.empty(0)
     if t.size == 0:
         why = f'joint {joint!r} is in none of its messages' if missing else 'no decodable message'
