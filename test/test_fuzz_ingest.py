@@ -40,6 +40,32 @@ def _mutate(rng, data: bytes) -> bytes:
     return bytes(d)
 
 
+def _mutated(rng, seeds, cases: int, max_edits: int):
+    """
+    Return ``(payloads, offsets, sizes)``: ``cases`` seed payloads with 1..max_edits edits each.
+
+    An edit is a flipped byte in the first 16 (the header fields), a truncation, trailing zeros
+    or a flipped byte anywhere.
+    """
+    payloads = []
+    for _ in range(cases):
+        d = bytearray(seeds[int(rng.integers(0, len(seeds)))])
+        for _ in range(int(rng.integers(1, max_edits + 1))):
+            where = rng.integers(0, 4)
+            if where == 0 and len(d) >= 16:
+                d[int(rng.integers(0, 16))] = int(rng.integers(0, 256))
+            elif where == 1:
+                d = d[:int(rng.integers(0, len(d) + 1))]
+            elif where == 2:
+                d += bytes(int(rng.integers(1, 9)))
+            elif len(d):
+                d[int(rng.integers(0, len(d)))] = int(rng.integers(0, 256))
+        payloads.append(bytes(d))
+    sizes = np.array([len(p) for p in payloads], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    return payloads, offsets, sizes
+
+
 @pytest.mark.parametrize('storage', sorted(CASES))
 def test_fuzz_bag_files(tmp_path, storage):
     base = tmp_path / 'base'
@@ -87,22 +113,8 @@ def test_fuzz_payloads_match_rosbags():
         msg = imu_msg(STORE2, t, six, frame_id='f' * int(rng.integers(0, 12)))
         seeds.append(bytes(STORE2.serialize_cdr(msg, 'sensor_msgs/msg/Imu',
                                                 little_endian=bool(i % 2))))
-    payloads = []
-    for _ in range(PAYLOAD_CASES):
-        d = bytearray(seeds[int(rng.integers(0, len(seeds)))])
-        for _ in range(int(rng.integers(1, 4))):
-            where = rng.integers(0, 4)
-            if where == 0 and len(d) >= 16:  # encapsulation header and frame_id length
-                d[int(rng.integers(0, 16))] = int(rng.integers(0, 256))
-            elif where == 1:
-                d = d[:int(rng.integers(0, len(d) + 1))]
-            elif where == 2:
-                d += bytes(int(rng.integers(1, 9)))
-            elif len(d):
-                d[int(rng.integers(0, len(d)))] = int(rng.integers(0, 256))
-        payloads.append(bytes(d))
-    sizes = np.array([len(p) for p in payloads], dtype=np.int64)
-    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    # edits in the first 16 bytes hit the encapsulation header and frame_id length
+    payloads, offsets, sizes = _mutated(rng, seeds, PAYLOAD_CASES, 3)
     buf = np.frombuffer(b''.join(payloads) + b'\0', np.uint8)
     accepted = _check_against_rosbags(payloads, offsets, sizes, buf)
     assert accepted > PAYLOAD_CASES // 4
@@ -195,22 +207,8 @@ def test_fuzz_ros1_payloads_match_rosbags():
         msg = imu_msg(STORE1, t, [float(rec.channels[k][i]) for k in IMU_CHANNELS],
                       frame_id='f' * int(rng.integers(0, 10)), ros1=True)
         seeds.append(bytes(STORE1.serialize_ros1(msg, 'sensor_msgs/msg/Imu')))
-    payloads = []
-    for _ in range(3000):
-        d = bytearray(seeds[int(rng.integers(0, len(seeds)))])
-        for _ in range(int(rng.integers(1, 3))):
-            where = rng.integers(0, 4)
-            if where == 0 and len(d) >= 16:  # seq, stamp, frame_id length
-                d[int(rng.integers(0, 16))] = int(rng.integers(0, 256))
-            elif where == 1:
-                d = d[:int(rng.integers(0, len(d) + 1))]
-            elif where == 2:
-                d += bytes(int(rng.integers(1, 9)))
-            elif len(d):
-                d[int(rng.integers(0, len(d)))] = int(rng.integers(0, 256))
-        payloads.append(bytes(d))
-    sizes = np.array([len(p) for p in payloads], dtype=np.int64)
-    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    # edits in the first 16 bytes hit seq, stamp and frame_id length
+    payloads, offsets, sizes = _mutated(rng, seeds, 3000, 2)
     t, values, ok = decode_imu_ros1(np.frombuffer(b''.join(payloads), np.uint8), offsets, sizes)
     accepted = 0
     for i, raw in enumerate(payloads):
