@@ -17,12 +17,16 @@ def imu_recording(n=2000, rate=333.0, seed=0, t0=1.7e9):
     return Recording(t, {k: rng.normal(scale=0.1, size=n) for k in IMU_CHANNELS})
 
 
-def imu_msg(store, t, six, frame_id='imu_link', ros1=False):
-    ty = store.types
+def header_msg(ty, t, frame_id='', ros1=False):
     ns = int(round(t * 1e9))
     stamp = ty['builtin_interfaces/msg/Time'](sec=ns // 10**9, nanosec=ns % 10**9)
-    header = (ty['std_msgs/msg/Header'](seq=0, stamp=stamp, frame_id=frame_id) if ros1
-              else ty['std_msgs/msg/Header'](stamp=stamp, frame_id=frame_id))
+    return (ty['std_msgs/msg/Header'](seq=0, stamp=stamp, frame_id=frame_id) if ros1
+            else ty['std_msgs/msg/Header'](stamp=stamp, frame_id=frame_id))
+
+
+def imu_msg(store, t, six, frame_id='imu_link', ros1=False):
+    ty = store.types
+    header = header_msg(ty, t, frame_id, ros1)
     vec = ty['geometry_msgs/msg/Vector3']
     return ty['sensor_msgs/msg/Imu'](
         header=header, orientation=ty['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
@@ -34,22 +38,16 @@ def imu_msg(store, t, six, frame_id='imu_link', ros1=False):
 
 def joint_msg(t, names, positions):
     ty = STORE2.types
-    ns = int(round(t * 1e9))
     return ty['sensor_msgs/msg/JointState'](
-        header=ty['std_msgs/msg/Header'](
-            stamp=ty['builtin_interfaces/msg/Time'](sec=ns // 10**9, nanosec=ns % 10**9),
-            frame_id=''),
+        header=header_msg(ty, t),
         name=list(names), position=np.array(positions, dtype=np.float64),
         velocity=np.array([], dtype=np.float64), effort=np.array([], dtype=np.float64))
 
 
 def vector3_msg(t, x):
     ty = STORE2.types
-    ns = int(round(t * 1e9))
     return ty['geometry_msgs/msg/Vector3Stamped'](
-        header=ty['std_msgs/msg/Header'](
-            stamp=ty['builtin_interfaces/msg/Time'](sec=ns // 10**9, nanosec=ns % 10**9),
-            frame_id=''),
+        header=header_msg(ty, t),
         vector=ty['geometry_msgs/msg/Vector3'](x=float(x), y=0.0, z=0.0))
 
 

@@ -1,6 +1,7 @@
 """Vectorised bag writing: bytes identical to rosbags' serializer, readable by rosbags."""
 from pathlib import Path
 
+from bag_factory import header_msg
 from gyro_char.ingest.bag_write import joint_state_encoder, typestore
 from gyro_char.ingest.cdr import decode_imu, encode_imu, imu_size
 from gyro_char.recordings import InputError, Recording, write_bag
@@ -59,11 +60,8 @@ def test_joint_state_encoding_bit_for_bit():
     pos = np.sin(t)
     raw = enc(t, pos)
     for i in range(50):
-        ns = int(round(t[i] * 1e9))
         msg = T['sensor_msgs/msg/JointState'](
-            header=T['std_msgs/msg/Header'](
-                stamp=T['builtin_interfaces/msg/Time'](sec=ns // 10**9, nanosec=ns % 10**9),
-                frame_id=''),
+            header=header_msg(T, t[i]),
             name=['stand_joint'], position=np.array([pos[i]]), velocity=np.array([], float),
             effort=np.array([], float))
         assert bytes(STORE.serialize_cdr(msg, 'sensor_msgs/msg/JointState')) == raw[i].tobytes()
