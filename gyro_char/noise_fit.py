@@ -218,17 +218,29 @@ def fit_l1(a_mat: np.ndarray, avar: np.ndarray, z0: Optional[np.ndarray] = None,
         cand = step(p * (1.0 + log_a - np.log(p)), wts / p)
         if cand is None:
             break
-        frac, improved = 1.0, False
-        while frac > 1e-4:
-            trial = z + frac * (cand - z)
-            f = _objective(trial, a_mat, log_a, wts)
-            if f < best - 1e-12 * max(1.0, best):
-                z, best, improved = trial, f, True
-                break
-            frac *= 0.5
-        if not improved:
+        moved = _halve_towards(z, cand, best, lambda trial: _objective(trial, a_mat, log_a, wts))
+        if moved is None:
             break
+        z, best = moved
     return z
+
+
+def _halve_towards(z: np.ndarray, cand: np.ndarray, best: float, cost
+                   ) -> Optional[Tuple[np.ndarray, float]]:
+    """
+    Step from ``z`` towards ``cand``, halving the step until ``cost`` drops below ``best``.
+
+    Return ``(trial, cost(trial))`` of the first step that descends, or None when no step down
+    to 1e-4 of the way does.
+    """
+    frac = 1.0
+    while frac > 1e-4:
+        trial = z + frac * (cand - z)
+        f = cost(trial)
+        if f < best - 1e-12 * max(1.0, best):
+            return trial, f
+        frac *= 0.5
+    return None
 
 
 def allan_cov(tau: np.ndarray, edf: np.ndarray, alpha: np.ndarray) -> np.ndarray:
@@ -268,16 +280,10 @@ def fit_weighted(a_mat, avar, edf, z0, max_iter: int = 30) -> np.ndarray:
         jac = white @ (a_mat * scale / p[:, None])
         rhs = white @ (target - np.log(p) + 1.0)
         cand = optimize.nnls(jac, rhs)[0] * scale
-        step, improved = 1.0, False
-        while step > 1e-4:
-            trial = z + step * (cand - z)
-            f = cost(trial)
-            if f < best - 1e-12 * max(1.0, best):
-                z, best, improved = trial, f, True
-                break
-            step *= 0.5
-        if not improved:
+        moved = _halve_towards(z, cand, best, cost)
+        if moved is None:
             break
+        z, best = moved
     return z
 
 
