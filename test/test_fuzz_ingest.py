@@ -142,13 +142,20 @@ def test_fuzz_uniform_batches_match_rosbags():
     assert accepted > 1000
 
 
-def _check_against_rosbags(payloads, offsets, sizes, buf):
-    """Return how many payloads the fast decoder accepted; each must equal rosbags' reading."""
-    t, values, ok = decode_imu(buf, offsets, sizes)
+def _check_against_rosbags(payloads, offsets, sizes, buf, decode=decode_imu, deserialize=None):
+    """
+    Return how many payloads the fast decoder accepted; each must equal rosbags' reading.
+
+    ``decode``/``deserialize`` default to the ROS 2 CDR decoder and rosbags' CDR reader.
+    """
+    if deserialize is None:
+        def deserialize(raw):
+            return STORE2.deserialize_cdr(raw, 'sensor_msgs/msg/Imu')
+    t, values, ok = decode(buf, offsets, sizes)
     accepted = 0
     for i, raw in enumerate(payloads):
         try:
-            stamp, six = imu_sample(STORE2.deserialize_cdr(raw, 'sensor_msgs/msg/Imu'))
+            stamp, six = imu_sample(deserialize(raw))
         except Exception:  # noqa: B902 - rosbags refusing it is a valid outcome
             assert not ok[i], f'case {i}: fast path accepted what rosbags refuses'
             continue
@@ -209,19 +216,10 @@ def test_fuzz_ros1_payloads_match_rosbags():
         seeds.append(bytes(STORE1.serialize_ros1(msg, 'sensor_msgs/msg/Imu')))
     # edits in the first 16 bytes hit seq, stamp and frame_id length
     payloads, offsets, sizes = _mutated(rng, seeds, 3000, 2)
-    t, values, ok = decode_imu_ros1(np.frombuffer(b''.join(payloads), np.uint8), offsets, sizes)
-    accepted = 0
-    for i, raw in enumerate(payloads):
-        try:
-            stamp, six = imu_sample(STORE1.deserialize_ros1(raw, 'sensor_msgs/msg/Imu'))
-        except Exception:  # noqa: B902 - rosbags refusing it is a valid outcome
-            assert not ok[i], f'case {i}: fast path accepted what rosbags refuses'
-            continue
-        if ok[i]:
-            accepted += 1
-            got = np.array([t[i]] + [values[k][i] for k in IMU_CHANNELS])
-            assert np.array_equal(got.view(np.int64),
-                                  np.array([stamp] + list(six)).view(np.int64)), f'case {i}'
+    accepted = _check_against_rosbags(
+        payloads, offsets, sizes, np.frombuffer(b''.join(payloads), np.uint8),
+        decode=decode_imu_ros1,
+        deserialize=lambda raw: STORE1.deserialize_ros1(raw, 'sensor_msgs/msg/Imu'))
     assert accepted > 500
 
 
