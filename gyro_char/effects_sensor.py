@@ -15,6 +15,11 @@ from scipy import signal
 DEG = np.pi / 180.0
 
 
+def _axis_param(default: float = -1.0) -> tuple:
+    """Return the PARAMS entry of the ``axis`` parameter that ``_rows`` reads."""
+    return (default, '-', '-1: all gyro axes, 0/1/2: x/y/z')
+
+
 def _rows(effect) -> list:
     axis = int(effect.params.get('axis', -1))
     if axis not in (-1, 0, 1, 2):
@@ -111,7 +116,7 @@ class TemperatureDrift(Effect):
                'drift the linear-drift state only partly absorbs.')
     PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0'),
               'tau_s': (600.0, 's', 'thermal time constant'),
-              'axis': (-1.0, '-', '-1: all gyro axes, 0/1/2: x/y/z')}
+              'axis': _axis_param()}
 
     def check(self):
         _rows(self)
@@ -158,7 +163,7 @@ class BiasInstability(_NoiseTerm):
     physics = ('1/f rate noise (Kasdin-Walter fractional integration, noise_gen): PSD '
                'B^2 / (pi f), Allan variance 2 ln2 / pi B^2 (flat floor 0.664 B).')
     PARAMS = {'B': (10.0 * DEG / 3600.0, 'rad/s', 'IEEE bias-instability coefficient'),
-              'axis': (-1.0, '-', '-1: all gyro axes, 0/1/2: x/y/z')}
+              'axis': _axis_param()}
 
 
 @register
@@ -171,7 +176,7 @@ class RateRandomWalk(_NoiseTerm):
     physics = ('Integrated white rate-acceleration noise: PSD K^2 / (2 pi f)^2, Allan '
                'variance K^2 tau / 3.')
     PARAMS = {'K': (1.0 * DEG / 3600.0, 'rad/s/sqrt(s)', 'IEEE rate-random-walk coefficient'),
-              'axis': (-1.0, '-', '-1: all gyro axes, 0/1/2: x/y/z')}
+              'axis': _axis_param()}
 
 
 @register
@@ -186,7 +191,7 @@ class GaussMarkov(Effect):
                'e^(-2 tau/tau_c))] with q = 2 sigma^2 / tau_c.')
     PARAMS = {'sigma': (0.01 * DEG, 'rad/s', 'stationary standard deviation'),
               'tau_s': (10.0, 's', 'correlation time'),
-              'axis': (-1.0, '-', '-1: all gyro axes, 0/1/2: x/y/z')}
+              'axis': _axis_param()}
 
     def check(self):
         _rows(self)
@@ -219,7 +224,7 @@ class AngleQuantization(Effect):
                'and the -1 slope is not formed), so the rate gets the IEEE quantization term '
                'Q = step / sqrt(12).')
     PARAMS = {'step_rad': (1.0e-5, 'rad', 'angle quantum'),
-              'axis': (-1.0, '-', '-1: all gyro axes, 0/1/2: x/y/z')}
+              'axis': _axis_param()}
 
     def check(self):
         _rows(self)
@@ -249,7 +254,7 @@ class Vibration(Effect):
                'internal rate); Allan deviation oscillating below ~1/freq_hz.')
     PARAMS = {'freq_hz': (19.0, 'Hz', 'tone frequency'),
               'amplitude': (0.05 * DEG, 'rad/s', 'tone amplitude'),
-              'axis': (2.0, '-', '-1: all gyro axes, 0/1/2: x/y/z')}
+              'axis': _axis_param(2.0)}
 
     def check(self):
         _rows(self)
