@@ -109,12 +109,16 @@ def twin_config(base: StaticBaseline, channel: str, effects: Sequence = ()) -> B
     return BenchConfig.from_preset(PRESET, overrides)
 
 
-def twin_effects(effects: Sequence, channel: str) -> list:
-    """Catalogue effect specs acting on ``channel`` only (not the other axes, not accel)."""
+def twin_effects(effects: Sequence, channel: Optional[str] = None) -> list:
+    """
+    Catalogue effect specs for a twin: never on the accelerometers.
+
+    With ``channel`` the effect acts on that gyro axis only; without, its ``axis`` is kept.
+    """
     out = []
     for name, params in effects:
         params = dict(params)
-        if 'axis' in EFFECTS[name].PARAMS:
+        if channel is not None and 'axis' in EFFECTS[name].PARAMS:
             params['axis'] = float(_row(channel))
         if 'accel' in EFFECTS[name].PARAMS:
             params['accel'] = 0.0

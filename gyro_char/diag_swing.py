@@ -27,9 +27,8 @@ from typing import List, Optional, Sequence
 
 from gyro_char import bench_sim
 from gyro_char.diag_fit import EffectSpace, Param
-from gyro_char.diag_static import output_step
+from gyro_char.diag_static import output_step, twin_effects
 from gyro_char.diagnose import Problem
-from gyro_char.effects import EFFECTS
 from gyro_char.recordings import ENCODER_CHANNEL, InputError, Recording
 from gyro_char.sim_config import BenchConfig
 from gyro_char.swing_align import integrate
@@ -163,16 +162,6 @@ def twin_config(base: SwingBaseline) -> BenchConfig:
     })
     cfg.encoder.adc_noise = encoder_white_sigma(base, cfg)
     return cfg
-
-
-def twin_effects(effects: Sequence) -> list:
-    out = []
-    for name, params in effects:
-        params = dict(params)
-        if 'accel' in EFFECTS[name].PARAMS:
-            params['accel'] = 0.0
-        out.append({'name': name, 'params': params})
-    return out
 
 
 def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):

@@ -14,6 +14,8 @@ GYRO_CHANNELS = ('gyro_x', 'gyro_y', 'gyro_z')
 ACCEL_CHANNELS = ('accel_x', 'accel_y', 'accel_z')
 IMU_CHANNELS = GYRO_CHANNELS + ACCEL_CHANNELS
 ENCODER_CHANNEL = 'encoder'
+# A step longer than this many median intervals is a gap (see ingest.sanitize.segments).
+DEFAULT_GAP_FACTOR = 5.0
 
 
 class InputError(ValueError):
@@ -92,7 +94,7 @@ def write_bag(path: str, imu: Recording, encoder: Optional[Recording] = None, *,
                quiet=quiet)
 
 
-def segments(rec: Recording, max_gap_factor: float = 5.0) -> List[Tuple[int, int]]:
+def segments(rec: Recording, max_gap_factor: float = DEFAULT_GAP_FACTOR) -> List[Tuple[int, int]]:
     """Return the contiguous runs of ``rec`` as ``[(start, stop), ...]`` index slices."""
     from gyro_char.ingest.sanitize import segments as _segments
     return _segments(rec, max_gap_factor)

@@ -8,13 +8,12 @@ resampled or filled: what a gap means is the estimator's call (see ``segments``)
 """
 from typing import List, Tuple
 
-from gyro_char.recordings import GYRO_CHANNELS, InputError, Recording
+from gyro_char.recordings import DEFAULT_GAP_FACTOR, GYRO_CHANNELS, InputError, Recording
 import numpy as np
 
 # |rate| this large (about 2000 deg/s) is beyond nearly every MEMS and optical gyro's range, so a
 # record reaching it is more likely deg/s written into a rad/s field
 DEG_S_SUSPECT_RAD_S = 35.0
-DEFAULT_GAP_FACTOR = 5.0
 # a block's median interval differing by this fraction from the record's counts as a rate change
 RATE_CHANGE_TOL = 0.1
 RATE_BLOCKS = 20
