@@ -18,7 +18,7 @@ stay integrated.
 from typing import List, Optional, Tuple
 
 from gyro_char import swing_batch
-from gyro_char.swing_align import trapezoid_gain
+from gyro_char.swing_align import integrate, trapezoid_gain
 from gyro_char.swing_model import (
     combine, Estimate, FilterResult, SwingEstimates, SwingNoise)
 import numpy as np
@@ -115,7 +115,7 @@ class SwingOnline:
         tt = np.concatenate([[p_tau], tau])
         rr = np.concatenate([[p_rate], rate])
         dt = np.diff(tt)
-        angle = p_angle + np.cumsum(0.5 * (rr[1:] + rr[:-1]) * dt)
+        angle = p_angle + integrate(tt, rr)[1:]
         steps = dt if self._gyro_last is not None else dt[1:]
         # Released gaps carry no increment, so they take no part in the integration's gain.
         steps = steps[~swing_batch.gap_steps(self._gyr.state, tau)[-steps.size:]]
