@@ -7,12 +7,10 @@ the channels they touch; ``internal_lowpass`` rescales truth N by its exact long
 """
 from gyro_char import noise_gen
 from gyro_char.effects import Effect, register
+from gyro_char.noise_model import DEG
 from gyro_char.recordings import GYRO_CHANNELS, IMU_CHANNELS, InputError
 import numpy as np
 from scipy import signal
-
-
-DEG = np.pi / 180.0
 
 
 def _axis_param(default: float = -1.0) -> tuple:

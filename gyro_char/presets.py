@@ -16,7 +16,8 @@ dataclasses in ``gyro_char.sim_config``, so a YAML override file uses the same n
 import copy
 import math
 
-DEG = math.pi / 180.0
+from gyro_char.noise_model import DEG
+
 DPH = DEG / 3600.0              # deg/h -> rad/s
 ARW = DEG / 60.0                # deg/sqrt(h) -> rad/sqrt(s)
 G0 = 9.80665                    # standard gravity, m/s^2

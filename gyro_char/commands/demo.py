@@ -16,9 +16,9 @@ import sys
 import time
 
 from gyro_char.cli import add_common
+from gyro_char.noise_model import DEG
 from gyro_char.recordings import GYRO_CHANNELS, InputError
 
-DEG = 3.141592653589793 / 180.0
 # The paper's measured means and 1 sigma (METHOD.md), printed for orientation.
 PAPER_TABLE1 = {
     'adis16405': {'x': (-0.09, 1.00, -0.58, 0.17, -4.14, 11.67),

@@ -8,17 +8,16 @@ hand-written parser is needed (measured against ``np.fromstring`` and a byte spl
 """
 import gzip
 import io
-import math
 from pathlib import Path
 from typing import Dict, List, Tuple
 import warnings
 import zlib
 
+from gyro_char.noise_model import DEG
 from gyro_char.recordings import InputError, Recording
 import numpy as np
 
 G0 = 9.80665  # standard gravity, m/s^2 per g
-DEG = math.pi / 180.0
 
 # column suffix -> factor to SI, per base name
 _UNITS = {'gyro': {'rads': 1.0, 'dps': DEG},

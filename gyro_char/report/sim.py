@@ -1,14 +1,14 @@
 """Simulated-record plots: the measured Allan deviation beside the simulator's truth."""
 from typing import Optional
 
-from gyro_char.noise_model import model_avar
+from gyro_char.noise_model import DEG, model_avar
 import matplotlib
 import numpy as np
 
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402,I100
 
-DPH = 3600.0 * 180.0 / np.pi
+DPH = 3600.0 / DEG  # rad/s -> deg/h
 
 
 def plot_allan_vs_truth(allan: dict, truth: dict, path: str,
