@@ -1,5 +1,5 @@
 # The swing kind of the diagnosis on simulated swing records with an effect it is not told of.
-from gyro_char import bench_sim, diag_gap, diag_swing, diagnose
+from gyro_char import bench_sim, diag_gap, diag_swing, diag_swing_obs, diagnose
 from gyro_char.sim_config import BenchConfig
 from gyro_char.swing_kf import estimate_swing
 import numpy as np
@@ -27,11 +27,11 @@ def test_swing_observables_see_a_delay_in_quadrature_only():
     d = 0.37 / RATE_HZ
     (i0, e0), (i1, e1) = _record([], 3), _record([('time_delay', {'delay_s': d})], 3)
     base = diag_swing.fit_baseline(i0, e0, 5.0)
-    ranges = diag_swing.layout(len(i0), base.dt, 5.0)
-    o0 = diag_swing.swing_observables(i0.t, i0.channels['gyro_x'], e0.t,
-                                      e0.channels['encoder'], 5.0, ranges)
-    o1 = diag_swing.swing_observables(i1.t, i1.channels['gyro_x'], e1.t,
-                                      e1.channels['encoder'], 5.0, ranges)
+    ranges = diag_swing_obs.layout(len(i0), base.dt, 5.0)
+    o0 = diag_swing_obs.swing_observables(i0.t, i0.channels['gyro_x'], e0.t,
+                                          e0.channels['encoder'], 5.0, ranges)
+    o1 = diag_swing_obs.swing_observables(i1.t, i1.channels['gyro_x'], e1.t,
+                                          e1.channels['encoder'], 5.0, ranges)
     expected = -base.amplitude * 2 * np.pi / 5.0 * d
     assert o1['quadrature'][0] - o0['quadrature'][0] == pytest.approx(expected, rel=0.05)
     assert abs(o1['in_phase'][0] - o0['in_phase'][0]) < 0.01 * abs(expected)
