@@ -91,6 +91,9 @@ class Diagnosis:
     null_gap: dict
     ambiguous: List[dict]
     baseline: dict
+    # Gaps above the level a record drawn from the model itself scores (see ``excess_gap``).
+    baseline_excess: float = 0.0
+    final_excess: float = 0.0
     evaluations: Dict[str, Evaluation] = field(default_factory=dict)
     reals: List[Obs] = field(default_factory=list)
     # The final model as simulator effects (selected effects plus the tuned nuisance entry).
@@ -108,10 +111,27 @@ class Diagnosis:
             'ranking': self.ranking,
             # Extra fields (the contract's fields above are exact):
             'null_gap': self.null_gap,
+            'excess_gap': {'metric': EXCESS_METRIC, 'baseline': self.baseline_excess,
+                           'final': self.final_excess},
             'ambiguous': self.ambiguous,
             'baseline': self.baseline,
             'model': [{'name': n, 'params': _jsonable(p)} for n, p in self.model],
         }
+
+
+EXCESS_METRIC = 'sqrt(gap^2 - mean null gap^2), 0 when below'
+
+
+def excess_gap(gap: float, null: np.ndarray) -> float:
+    """
+    Return the part of ``gap`` above what the baseline's own twins score against each other.
+
+    The rms z of a record drawn from the model itself is about 1, not 0 (its own noise), so
+    1 - final/baseline understates how much of a gap an effect removes, the more so the
+    nearer the effect is to detectability. The squared gap is a mean of z^2, whose null
+    expectation is the mean squared leave-one-out gap; what is above it is the departure.
+    """
+    return float(np.sqrt(max(gap * gap - float(np.mean(np.square(null))), 0.0)))
 
 
 def _jsonable(params: dict) -> dict:
@@ -221,7 +241,9 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         null_gap={'mean': float(np.mean(null)), 'std': float(np.std(null, ddof=1)),
                   'q95': float(np.quantile(null, 0.95)), 'repeats': repeats,
                   'final_model_q95': explained, 'shrink_needed': shrink_needed},
-        ambiguous=ambiguous, baseline=problem.baseline, evaluations=evaluations,
+        ambiguous=ambiguous, baseline=problem.baseline,
+        baseline_excess=excess_gap(base.gap, null), final_excess=excess_gap(current.gap, null),
+        evaluations=evaluations,
         reals=problem.reals, model=model)
 
 

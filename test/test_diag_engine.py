@@ -2,6 +2,7 @@
 from gyro_char import diagnose
 from gyro_char.diag_fit import EffectSpace, Param
 import numpy as np
+import pytest
 
 PATTERN = np.sin(np.linspace(0, 3, 12))
 OTHER = np.r_[np.ones(6), -np.ones(6)]
@@ -56,3 +57,16 @@ def test_two_effects_are_added_greedily_in_order_of_size():
     assert d2.selected_effects[0] in ('time_delay', 'g_sensitivity')
     assert 'vibration' in d2.selected_effects
     assert d2.final_gap < d2.steps[0]['gap_after'] < d2.baseline_gap
+
+
+def test_excess_gap_removes_the_null_level():
+    null = np.array([1.0, 1.2, 0.8, 1.0])          # mean square 1.02
+    assert diagnose.excess_gap(1.0, null) == 0.0
+    assert diagnose.excess_gap(np.sqrt(9.0 + 1.02), null) == pytest.approx(3.0)
+
+
+def test_excess_gap_reported_and_shrinks_when_explained():
+    d = diagnose.run(_problem(0.0, real_other=1.0), repeats=6, seed=3)
+    j = d.to_json()['excess_gap']
+    assert j['baseline'] > 5.0 * max(j['final'], 0.1)
+    assert j['final'] < d.final_gap
