@@ -172,7 +172,7 @@ def swing_problem(imu: Recording, encoder: Recording, period_s: float, *,
         return _obs(*simulate_twin(base, effects, seed), base, ranges)
 
     spaces = [s for s in swing_spaces(base) if s.name in names]
-    spaces = signs(spaces, real, sim)
+    spaces = signs(spaces, [real], lambda i, fx, s: sim(fx, s))
     return Problem(kind='swing', reals=[real], simulate=lambda i, fx, s: sim(fx, s),
                    spaces=spaces, ranges=[ranges], units=dict(UNITS),
                    baseline=base.to_json(), context=base)

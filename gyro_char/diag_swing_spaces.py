@@ -4,7 +4,7 @@ Search spaces of the swing diagnosis's candidate effects, scaled to the fitted r
 Bounds come from the record's own noise (what an effect must reach to be seen); signed
 parameters get the sign that moves the twins towards the record (``signs``).
 """
-from typing import List, TYPE_CHECKING
+from typing import Callable, List, Sequence, TYPE_CHECKING
 
 from gyro_char.diag_fit import EffectSpace, Param
 import numpy as np
@@ -49,26 +49,29 @@ SIGNED = {'time_delay': ['delay_s'], 'g_sensitivity': ['gy'],
           'scale_factor_nonlinearity': ['k2', 'k3'], 'scale_factor_asymmetry': ['a']}
 
 
-def signs(spaces: List[EffectSpace], real: dict, simulate) -> List[EffectSpace]:
+def signs(spaces: List[EffectSpace], reals: Sequence[dict],
+          simulate: Callable[[int, list, int], dict]) -> List[EffectSpace]:
     """
     Give each signed parameter the sign that moves the twins towards the record.
 
     A probe twin with the parameter at its range's geometric middle, against a baseline twin
     of the same seed (common random numbers: the difference is the effect alone), gives the
     effect's response on the harmonic blocks; its projection on the record's departure from
-    the baseline twin gives the sign.
+    the baseline twin gives the sign. With several records (``simulate(record, effects, seed)``
+    as in ``diagnose.Problem``) the departures of all of them are projected together.
     """
     blocks = ('in_phase', 'quadrature', 'harmonic_2f', 'harmonic_3f')
-    base = simulate([], 4242)
-    dev = np.concatenate([real[b] - base[b] for b in blocks])
+    idx = range(len(reals))
+    base = [simulate(i, [], 4242) for i in idx]
+    dev = np.concatenate([reals[i][b] - base[i][b] for i in idx for b in blocks])
     out = []
     for sp in spaces:
         params = []
         for p in sp.params:
             if p.name in SIGNED.get(sp.name, []):
-                probe = simulate([(sp.name, {**sp.fixed, p.name: float(np.sqrt(p.lo * p.hi))})],
-                                 4242)
-                resp = np.concatenate([probe[b] - base[b] for b in blocks])
+                fx = [(sp.name, {**sp.fixed, p.name: float(np.sqrt(p.lo * p.hi))})]
+                probe = [simulate(i, fx, 4242) for i in idx]
+                resp = np.concatenate([probe[i][b] - base[i][b] for i in idx for b in blocks])
                 sign = 1.0 if float(np.einsum('i,i->', resp, dev)) >= 0 else -1.0
                 p = Param(p.name, p.lo, p.hi, p.log, p.integer, sign)
             params.append(p)
