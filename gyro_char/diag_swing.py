@@ -1,15 +1,23 @@
 """
 The swing kind of the diagnosis: baseline fit, simulated twins, the problem for the engine.
 
-Baseline = the paper's swing model fitted to the record: the 5-state Kalman estimates
+Baseline = the paper's swing model fitted to the record(s): the 5-state Kalman estimates
 (``swing_kf.estimate_swing``: scale-factor error, bias, drift, the gyro's white noise N and the
-encoder's angle noise) put into the bench simulator (``bench_sim.simulate_swing``) with the
+encoder's angle noise) put into the bench simulator (``bench_sim.simulate_swing``) with each
 record's amplitude, period, rates and output step. Everything else is for the effects.
 Observables: ``gyro_char.diag_swing_obs``; candidate effects' search spaces:
 ``gyro_char.diag_swing_spaces``.
+
+Several records of the same gyro (other amplitudes and/or periods) are diagnosed together: the
+paper's model has ONE scale-factor error per gyro, so every twin gets the inverse-variance mean
+of the records' Kalman estimates, while bias, drift and noise levels stay per record; the effect
+parameters are shared by all records (the engine pools the blocks). A scale factor that depends
+on the rate (nonlinearity) then shows as a departure of the ``scale_factor_shift`` block - each
+further record's least-squares scale factor minus the first record's - and the cos θ residual
+of a delay (∝ A ω) and of a g-sensitivity (∝ g A / ω) no longer match on both periods.
 """
 from dataclasses import dataclass, replace
-from typing import Optional, Sequence
+from typing import Optional, Sequence, Tuple
 
 from gyro_char import bench_sim
 from gyro_char.diag_static import output_step, twin_effects
@@ -18,6 +26,7 @@ from gyro_char.diag_swing_spaces import signs, swing_spaces
 from gyro_char.diagnose import Problem
 from gyro_char.recordings import ENCODER_CHANNEL, InputError, Recording
 from gyro_char.sim_config import BenchConfig
+from gyro_char.swing_align import integrate
 from gyro_char.swing_kf import estimate_swing
 import numpy as np
 
@@ -42,11 +51,21 @@ class SwingBaseline:
     encoder_dt: float
     duration: float
     axis: str
+    # This record's own Kalman estimate (``scale_factor_error`` is what the twin uses: the
+    # gyro's one scale-factor error, pooled over the records diagnosed together).
+    record_scale_factor_error: float = 0.0
+    record_scale_factor_sigma: float = 0.0
+
+    @property
+    def peak_rate(self) -> float:
+        return 2.0 * np.pi * self.amplitude / self.period_s
 
     def to_json(self) -> dict:
-        units = {'period_s': 's', 'amplitude': 'rad', 'scale_factor_error': '1',
-                 'bias': 'rad/s', 'drift': 'rad/s^2', 'N': 'rad/s^0.5', 'encoder_sigma': 'rad',
-                 'lsb': 'rad/s', 'dt': 's', 'encoder_dt': 's', 'duration': 's'}
+        units = {'period_s': 's', 'amplitude': 'rad', 'peak_rate': 'rad/s',
+                 'scale_factor_error': '1', 'record_scale_factor_error': '1',
+                 'record_scale_factor_sigma': '1', 'bias': 'rad/s', 'drift': 'rad/s^2',
+                 'N': 'rad/s^0.5', 'encoder_sigma': 'rad', 'lsb': 'rad/s', 'dt': 's',
+                 'encoder_dt': 's', 'duration': 's'}
         return {k: {'value': float(getattr(self, k)), 'unit': u} for k, u in units.items()}
 
 
@@ -64,6 +83,8 @@ def fit_baseline(imu: Recording, encoder: Recording, period_s: float,
     return SwingBaseline(
         period_s=float(period_s), amplitude=float(est.amplitude_encoder.value),
         scale_factor_error=float(est.scale_factor_error.value), bias=float(est.bias.value),
+        record_scale_factor_error=float(est.scale_factor_error.value),
+        record_scale_factor_sigma=float(est.scale_factor_error.sigma),
         drift=float(est.bias_drift.value),
         N=float(np.sqrt(max(n2, 0.01 * est.noise_gyro_arw ** 2))),
         encoder_sigma=float(est.noise_encoder_rad), lsb=lsb, dt=dt,
@@ -133,16 +154,36 @@ def calibrate_n(base: SwingBaseline, real: dict, ranges: dict,
     return replace(base, N=base.N * float(np.sqrt(_white(real) / np.mean(sims))))
 
 
-def swing_problem(imu: Recording, encoder: Recording, period_s: float, *,
-                  axis: Optional[str] = None, max_samples: Optional[int] = None,
-                  names: Sequence[str] = SWING_EFFECTS,
-                  base: Optional[SwingBaseline] = None) -> Problem:
-    """
-    Build the diagnosis problem for one swing record (IMU + encoder).
+def pooled_scale_factor(bases: Sequence[SwingBaseline]) -> Tuple[float, float]:
+    """Inverse-variance mean of the records' Kalman scale-factor errors, and its sigma."""
+    sf = np.array([b.record_scale_factor_error for b in bases])
+    sig = np.array([b.record_scale_factor_sigma for b in bases])
+    if np.any(sig <= 0) or not np.all(np.isfinite(sig)):
+        return float(np.mean(sf)), float(np.std(sf) / np.sqrt(sf.size))
+    w = 1.0 / sig ** 2
+    return float(np.sum(w * sf) / np.sum(w)), float(1.0 / np.sqrt(np.sum(w)))
 
-    Records longer than ``max_samples`` gyro samples are cut to that span from the start of
-    the overlap (twins are simulated at the same length).
+
+def record_scale(imu: Recording, encoder: Recording, axis: str) -> float:
     """
+    Least-squares scale of the gyro angle on the encoder angle (plus a quadratic trend), - 1.
+
+    The scale the observables' residual fit removes; across records of one gyro it moves only
+    with what the paper's model lacks (a rate-dependent scale factor).
+    """
+    t_g, t_e = imu.t, encoder.t
+    lo, hi = max(t_g[0], t_e[0]), min(t_g[-1], t_e[-1])
+    m = (t_g >= lo) & (t_g <= hi)
+    tau = t_g[m] - lo
+    ang = integrate(tau, imu.channels[f'gyro_{axis}'][m])
+    e = np.interp(tau, t_e - lo, encoder.channels[ENCODER_CHANNEL])
+    ts = tau / max(tau[-1], 1e-9)
+    a = np.array([e - e.mean(), np.ones_like(ts), ts - 0.5, ts * ts - 1.0 / 3.0])
+    coef = np.linalg.solve(np.einsum('ik,jk->ij', a, a), np.einsum('ik,k->i', a, ang))
+    return float(coef[0] - 1.0)
+
+
+def _cut(imu: Recording, encoder: Recording, max_samples: Optional[int]):
     if encoder is None or ENCODER_CHANNEL not in encoder.channels:
         raise InputError('the swing diagnosis needs the encoder angle of the stand')
     if max_samples and len(imu) > max_samples:
@@ -153,26 +194,90 @@ def swing_problem(imu: Recording, encoder: Recording, period_s: float, *,
         keep = encoder.t <= t_end
         encoder = Recording(encoder.t[keep], {ENCODER_CHANNEL: encoder.channels[
             ENCODER_CHANNEL][keep]}, encoder.source, list(encoder.notes))
-    fitted = base is None
-    if fitted:
-        base = fit_baseline(imu, encoder, period_s, axis)
-    ch = f'gyro_{base.axis}'
-    if ch not in imu.channels:
-        raise InputError(f'no {ch} channel in the IMU input')
     n_min = 8 * 256
     if len(imu) < n_min:
         raise InputError(f'swing record too short for the diagnosis: {len(imu)} samples '
                          f'(need >= {n_min})')
-    ranges = layout(len(imu), base.dt, base.period_s)
-    real = _obs(imu, encoder, base, ranges)
+    return imu, encoder
+
+
+def swing_problem(imu: Recording, encoder: Recording, period_s: float, *,
+                  axis: Optional[str] = None, max_samples: Optional[int] = None,
+                  names: Sequence[str] = SWING_EFFECTS,
+                  base: Optional[SwingBaseline] = None) -> Problem:
+    """Build the diagnosis problem for one swing record (see ``swing_records_problem``)."""
+    return swing_records_problem([(imu, encoder, period_s)], axis=axis,
+                                 max_samples=max_samples, names=names,
+                                 bases=None if base is None else [base])
+
+
+def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]], *,
+                          axis: Optional[str] = None, max_samples: Optional[int] = None,
+                          names: Sequence[str] = SWING_EFFECTS,
+                          bases: Optional[Sequence[SwingBaseline]] = None,
+                          scale_factor: Optional[float] = None) -> Problem:
+    """
+    Build the diagnosis problem for swing records (IMU, encoder, period) of one gyro.
+
+    Records longer than ``max_samples`` gyro samples are cut to that span from the start of
+    the overlap (twins are simulated at the same length). ``bases`` (fitted elsewhere) are used
+    as given; otherwise each record's baseline is fitted and every twin gets the pooled
+    scale-factor error (``scale_factor`` when given, e.g. a held-out check's frozen value).
+    ``problem.context`` is the list of the records' baselines.
+    """
+    records = [(*_cut(i, e, max_samples), float(p)) for i, e, p in records]
+    fitted = bases is None
     if fitted:
-        base = calibrate_n(base, real, ranges)
+        bases = [fit_baseline(i, e, p, axis) for i, e, p in records]
+        sf = pooled_scale_factor(bases)[0] if scale_factor is None else float(scale_factor)
+        bases = [replace(b, scale_factor_error=sf) for b in bases]
+    bases = list(bases)
+    if len({b.axis for b in bases}) > 1:
+        raise InputError(f'the records swing different gyro axes: {[b.axis for b in bases]}; '
+                         'give --axis')
+    ch = f'gyro_{bases[0].axis}'
+    for imu, _, _ in records:
+        if ch not in imu.channels:
+            raise InputError(f'no {ch} channel in the IMU input {imu.source}')
+    ranges = [layout(len(imu), b.dt, b.period_s) for (imu, _, _), b in zip(records, bases)]
+    reals = [_obs(imu, enc, b, r) for (imu, enc, _), b, r in zip(records, bases, ranges)]
+    if fitted:
+        bases = [calibrate_n(b, real, r) for b, real, r in zip(bases, reals, ranges)]
+    # The rate dependence of the scale factor: each further record's scale against the first's.
+    scales = [record_scale(imu, enc, b.axis) for (imu, enc, _), b in zip(records, bases)]
+    for i in range(1, len(records)):
+        reals[i]['scale_factor_shift'] = np.array([scales[i] - scales[0]])
+        ranges[i]['scale_factor_shift'] = np.array([[bases[0].peak_rate, bases[i].peak_rate]])
+    first_scale = {}  # (effects, seed) -> scale of the first record's twin
 
-    def sim(effects: list, seed: int) -> dict:
-        return _obs(*simulate_twin(base, effects, seed), base, ranges)
+    def sim(i: int, effects: list, seed: int) -> dict:
+        # Record 0 keeps the seed (a single-record diagnosis is unchanged); the others are
+        # offset so that no two records share a noise realisation.
+        imu, enc = simulate_twin(bases[i], effects, seed + 7919 * i)
+        o = _obs(imu, enc, bases[i], ranges[i])
+        key = (repr(effects), seed)
+        if i == 0 and len(records) > 1:
+            if len(first_scale) > 512:
+                first_scale.clear()
+            first_scale[key] = record_scale(imu, enc, bases[0].axis)
+        elif i > 0:
+            if key not in first_scale:
+                first_scale[key] = record_scale(*simulate_twin(bases[0], effects, seed),
+                                                bases[0].axis)
+            o['scale_factor_shift'] = np.array([record_scale(imu, enc, bases[i].axis)
+                                                - first_scale[key]])
+        return o
 
-    spaces = [s for s in swing_spaces(base) if s.name in names]
-    spaces = signs(spaces, [real], lambda i, fx, s: sim(fx, s))
-    return Problem(kind='swing', reals=[real], simulate=lambda i, fx, s: sim(fx, s),
-                   spaces=spaces, ranges=[ranges], units=dict(UNITS),
-                   baseline=base.to_json(), context=base)
+    # Search spaces scaled to the longest record (the others' bounds differ by the ratio of
+    # their peak rates, well inside the spans' decades).
+    longest = max(bases, key=lambda b: b.duration)
+    spaces = [s for s in swing_spaces(longest) if s.name in names]
+    spaces = signs(spaces, reals, sim)
+    units = dict(UNITS, scale_factor_shift='rad/s')
+    baseline = bases[0].to_json()
+    if len(bases) > 1:
+        sf, sf_sigma = pooled_scale_factor(bases)
+        baseline['pooled_scale_factor_error'] = {'value': sf, 'sigma': sf_sigma, 'unit': '1'}
+        baseline['records'] = [b.to_json() for b in bases]
+    return Problem(kind='swing', reals=reals, simulate=sim, spaces=spaces, ranges=ranges,
+                   units=units, baseline=baseline, context=bases)
