@@ -13,16 +13,55 @@ gyro stamps), decomposed on the swing phase θ = ωt + ψ of the encoder's own s
 - ``residual_psd``: log10 Welch PSD of the residual's rate (its difference over dt) in log bins
   from 1 Hz to 1/8 of the sample rate (stamp jitter, encoder interpolation error, smoothing).
 
+The same fit, evaluated on the ENCODER stamps (gyro angle interpolated there), gives the
+residual the encoder's own errors show in at full encoder rate (``encoder_residual``):
+
+- ``encoder_lines``: its spectrum against the encoder ANGLE (``line_spectrum``), log10 of the
+  largest amplitude (rad) in each log band of line counts (cycles per revolution) from 64 to
+  16384. A sine-cosine interpolation error is periodic in the angle, 2π / L, whatever the
+  rate: every pass over an angle adds coherently, while the gyro's and the encoder's noise
+  do not. The peak's line count per band is kept unscored (``SwingObs.line_peaks``) for
+  ``diag_swing_spaces.signs``;
+- ``rate_locked``: the residual's increment variance in bins of |cos θ| (i.e. of the swing
+  rate) minus that of the slowest bin, per unit of rate² (``rate_locked``). An encoder stamp
+  error δ reads as an angle error rate · δ, a noise whose variance grows as the rate squared;
+  the gyro's white noise, the quantizations and the encoder's white noise do not depend on
+  the swing phase;
+- ``increment_acf``: normalised autocorrelation at lags 1..4 of the GYRO-stamp residual's
+  increments. This is the residual's whiteness, not the swing filter's innovations
+  (``swing_batch`` folds rows into a square-root information factor and never forms them);
+  for the gyro stream the two differ by the fitted deterministic part only. Colouring of the
+  gyro noise (a sensor FIR such as a fractional group delay, smoothing) shows here.
+
 Whole-record components rather than per-window ones: a constant effect's z grows with the
 record length instead of being spread over windows; the twins' repeats give the scatter.
 """
-from typing import List
+from typing import List, Tuple
 
 from gyro_char.swing_align import integrate
 import numpy as np
 from scipy import signal
 
 PSD_BINS = 10
+# Line-count bands (cycles per revolution) of ``encoder_lines``.
+LINE_EDGES = np.geomspace(64.0, 16384.0, 9)
+# Angle bins of the line spectrum: Nyquist 1.25 x the top band edge.
+ANGLE_BIN = np.pi / (1.25 * LINE_EDGES[-1])
+# Residual high-pass before the line spectrum (samples of a centred moving mean): the gyro
+# angle's random walk is slow in time and would leak into every line count at the turning
+# points, where the angle stands still.
+HP_SAMPLES = 51
+# |cos θ| bin edges of ``rate_locked`` (the first bin is the reference).
+RATE_EDGES = (0.0, 0.3, 0.6, 0.85, 1.0001)
+STAMP_UNIT = 1e-6  # s, scale of ``rate_locked``
+ACF_LAGS = 4
+TWO_PI = 2.0 * np.pi
+
+
+class SwingObs(dict):
+    """Observable blocks of one record, plus unscored side information (``line_peaks``)."""
+
+    line_peaks: np.ndarray = np.array([])
 
 
 def _solve(cols: List[np.ndarray], y: np.ndarray) -> np.ndarray:
@@ -37,23 +76,105 @@ def _solve(cols: List[np.ndarray], y: np.ndarray) -> np.ndarray:
 
 
 def layout(n_psd: int, dt: float, period_s: float) -> dict:
-    """Per block, the (lo, hi) range (Hz) of every element."""
+    """Per block, the (lo, hi) range of every element (units in ``UNITS``)."""
     f0 = 1.0 / period_s
     # Up to 1/8 of the sample rate: above it the residual is shaped by where the gyro stamps
     # fall between encoder samples (linear interpolation), which says nothing about the gyro.
     edges = np.geomspace(1.0, 0.125 / dt, PSD_BINS + 1)
+    lags = np.arange(1, ACF_LAGS + 1) * dt
     return {'in_phase': np.array([[f0, f0]]), 'quadrature': np.array([[f0, f0]]),
             'harmonic_2f': np.array([[2 * f0, 2 * f0]] * 2),
             'harmonic_3f': np.array([[3 * f0, 3 * f0]] * 2),
-            'residual_psd': np.c_[edges[:-1], edges[1:]]}
+            'residual_psd': np.c_[edges[:-1], edges[1:]],
+            'encoder_lines': np.c_[LINE_EDGES[:-1], LINE_EDGES[1:]],
+            'rate_locked': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
+            'increment_acf': np.c_[lags, lags]}
 
 
 UNITS = {'in_phase': 'Hz', 'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
-         'residual_psd': 'Hz'}
+         'residual_psd': 'Hz', 'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|',
+         'increment_acf': 's'}
+
+
+def highpass(x: np.ndarray, n: int = HP_SAMPLES) -> np.ndarray:
+    """``x`` minus its centred moving mean over ``n`` samples (shorter at the ends)."""
+    c = np.concatenate(([0.0], np.cumsum(x)))
+    i = np.arange(x.size)
+    lo, hi = np.maximum(i - n // 2, 0), np.minimum(i + n // 2 + 1, x.size)
+    return x - (c[hi] - c[lo]) / (hi - lo)
+
+
+def line_spectrum(phi: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """
+    Amplitude spectrum (rad) of ``r`` against the angle ``phi``: line counts, amplitudes.
+
+    ``r`` is averaged in angle bins of ``ANGLE_BIN`` (every pass over an angle together: the
+    mean error at that angle), Hann-windowed over the angle span and Fourier-transformed with
+    zero padding to twice the bin count. A term a sin(L φ + p) reads a at line count L.
+    Cost: two bincounts and one FFT of a few thousand points.
+    """
+    j = ((phi - phi.min()) / ANGLE_BIN).astype(np.intp)
+    n = int(j[-1] if j.size == 1 else j.max()) + 1
+    cnt = np.bincount(j, minlength=n)
+    m = np.bincount(j, r, minlength=n)
+    full = cnt > 0
+    m[full] /= cnt[full]
+    win = np.hanning(n + 2)[1:-1] * full
+    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    amp = 2.0 * np.abs(np.fft.rfft(m * win, nfft)) / max(win.sum(), 1e-300)
+    lines = TWO_PI * np.arange(amp.size) / (nfft * ANGLE_BIN)
+    return lines, amp
+
+
+def band_peaks(lines: np.ndarray, amp: np.ndarray,
+               edges: np.ndarray = LINE_EDGES) -> Tuple[np.ndarray, np.ndarray]:
+    """Largest amplitude per band and its line count (parabolic interpolation on log amp)."""
+    la = np.log(np.maximum(amp, 1e-300))
+    dl = lines[1] - lines[0]
+    peaks, where = np.zeros(edges.size - 1), np.zeros(edges.size - 1)
+    for b, (lo, hi) in enumerate(zip(edges[:-1], edges[1:])):
+        idx = np.flatnonzero((lines >= lo) & (lines < hi))
+        k = int(idx[np.argmax(amp[idx])])
+        off = 0.0
+        if 0 < k < amp.size - 1:
+            den = la[k - 1] - 2.0 * la[k] + la[k + 1]
+            off = 0.5 * (la[k - 1] - la[k + 1]) / den if den < 0 else 0.0
+        peaks[b], where[b] = amp[k], lines[k] + off * dl
+    return peaks, where
+
+
+def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
+    """
+    Apparent stamp-error variance per |cos th| bin, from the increments ``d`` (asinh, µs²).
+
+    Per bin k, the mean square of ``d`` minus that of the slowest bin, over twice the mean
+    squared swing rate (``peak_rate`` |cos th|) minus the slowest bin's: a white stamp error
+    of σ reads σ² in every bin. A difference, not a ratio, so that white angle noise (which
+    the baseline fit may have inflated with an encoder error it cannot model) cancels instead
+    of diluting it; asinh(x / 1 µs²) keeps the sign and compresses like a log above 1 µs².
+    """
+    nb = len(RATE_EDGES) - 1
+    c = np.abs(np.cos(th))
+    k = np.clip(np.digitize(c, RATE_EDGES) - 1, 0, nb - 1)
+    cnt = np.maximum(np.bincount(k, minlength=nb), 1)
+    ms = np.bincount(k, d * d, minlength=nb) / cnt
+    w2 = peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt
+    var = (ms[1:] - ms[0]) / np.maximum(2.0 * (w2[1:] - w2[0]), 1e-300)
+    return np.arcsinh(var / STAMP_UNIT ** 2)
+
+
+def increment_acf(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
+    """Normalised autocorrelation of the increments of ``r`` at lags 1..``lags``."""
+    d = np.diff(r)
+    d = d - d.mean()
+    # einsum, not np.dot: a threaded BLAS call costs more than the sum on a busy machine.
+    v = float(np.einsum('i,i->', d, d))
+    return np.array([np.einsum('i,i->', d[:-k], d[k:]) / max(v, 1e-300)
+                     for k in range(1, lags + 1)])
 
 
 def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarray,
-                      period_s: float, ranges: dict) -> dict:
+                      period_s: float, ranges: dict) -> SwingObs:
     """All swing blocks of one record (gyro rate rad/s at ``t_g``, encoder rad at ``t_e``)."""
     lo, hi = max(t_g[0], t_e[0]), min(t_g[-1], t_e[-1])
     m = (t_g >= lo) & (t_g <= hi)
@@ -62,7 +183,8 @@ def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: n
     e = np.interp(tau, t_e - lo, enc)
     w = 2.0 * np.pi / period_s
     s1, c1 = np.sin(w * tau), np.cos(w * tau)
-    ts = tau / max(tau[-1], 1e-9)
+    span = max(tau[-1], 1e-9)
+    ts = tau / span
     one = np.ones_like(tau)
     ce = _solve([s1, c1, one, ts, ts * ts], e)
     psi = float(np.arctan2(ce[1], ce[0]))
@@ -77,5 +199,18 @@ def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: n
     f, p = signal.welch(np.diff(r) / dt, fs=1.0 / dt, nperseg=min(2048, r.size // 8))
     psd = np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
                     else np.interp(0.5 * (a + b), f, p) for a, b in ranges['residual_psd']])
-    return {'in_phase': h[0:1], 'quadrature': h[1:2], 'harmonic_2f': h[2:4],
-            'harmonic_3f': h[4:6], 'residual_psd': np.log10(np.maximum(psd, 1e-300))}
+    # The same fit on the encoder stamps inside the gyro span.
+    me = (t_e >= lo + tau[0]) & (t_e <= lo + tau[-1])
+    tau_e, phi = t_e[me] - lo, enc[me]
+    tse = tau_e / span
+    r_e = np.interp(tau_e, tau, ang) - k[0] * phi - (k[1] + k[2] * tse + k[3] * tse * tse)
+    peaks, where = band_peaks(*line_spectrum(phi, highpass(r_e)))
+    th_e = w * 0.5 * (tau_e[1:] + tau_e[:-1]) + psi
+    out = SwingObs({'in_phase': h[0:1], 'quadrature': h[1:2], 'harmonic_2f': h[2:4],
+                    'harmonic_3f': h[4:6],
+                    'residual_psd': np.log10(np.maximum(psd, 1e-300)),
+                    'encoder_lines': np.log10(np.maximum(peaks, 1e-300)),
+                    'rate_locked': rate_locked(th_e, np.diff(r_e), w * np.hypot(ce[0], ce[1])),
+                    'increment_acf': increment_acf(r)})
+    out.line_peaks = where
+    return out

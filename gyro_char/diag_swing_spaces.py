@@ -2,9 +2,10 @@
 Search spaces of the swing diagnosis's candidate effects, scaled to the fitted record.
 
 Bounds come from the record's own noise (what an effect must reach to be seen); signed
-parameters get the sign that moves the twins towards the record (``signs``).
+parameters get the sign that moves the twins towards the record, and the encoder's line
+count starts at the line the record's encoder residual shows (``signs``).
 """
-from typing import Callable, List, Sequence, TYPE_CHECKING
+from typing import Callable, List, Optional, Sequence, TYPE_CHECKING
 
 from gyro_char.diag_fit import EffectSpace, Param
 import numpy as np
@@ -33,6 +34,8 @@ def swing_spaces(base: 'SwingBaseline') -> List[EffectSpace]:
             Param('k3', 0.03 * sig / rate ** 3, 300.0 * sig / rate ** 3)]),
         EffectSpace('scale_factor_asymmetry', [Param('a', 0.03 * sig / rate,
                                                      300.0 * sig / rate)]),
+        # Line count: started by ``signs`` at the record's line-spectrum peak (exact to a
+        # fraction of a line); its range is +-1 % around that start (a whole number).
         EffectSpace('encoder_cyclic_error', [Param('a1', 0.1 * base.encoder_sigma + 1e-9,
                                                    30.0 * base.encoder_sigma + 1e-7)],
                     fixed={'a2': 0.0}),
@@ -59,6 +62,7 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
     effect's response on the harmonic blocks; its projection on the record's departure from
     the baseline twin gives the sign. With several records (``simulate(record, effects, seed)``
     as in ``diagnose.Problem``) the departures of all of them are projected together.
+    The encoder cyclic error's line count is started at the records' line (``with_lines``).
     """
     blocks = ('in_phase', 'quadrature', 'harmonic_2f', 'harmonic_3f')
     idx = range(len(reals))
@@ -66,6 +70,8 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
     dev = np.concatenate([reals[i][b] - base[i][b] for i in idx for b in blocks])
     out = []
     for sp in spaces:
+        if sp.name == 'encoder_cyclic_error':
+            sp = with_lines(sp, reals, base)
         params = []
         for p in sp.params:
             if p.name in SIGNED.get(sp.name, []):
@@ -77,3 +83,41 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
             params.append(p)
         out.append(EffectSpace(sp.name, params, dict(sp.fixed), dict(sp.start)))
     return out
+
+
+# Line-spectrum excess (log10 amplitude) above which a band is taken as a line, not noise.
+LINE_EXCESS = 0.3
+
+
+def line_start(reals: Sequence[dict], base: Sequence[dict]) -> Optional[float]:
+    """
+    Line count of the record's encoder error: the strongest line that stands out of the twin.
+
+    Among the bands of ``encoder_lines`` where a record exceeds its baseline twin by more
+    than ``LINE_EXCESS`` (a factor 2 in amplitude), the one with the largest amplitude (a
+    cyclic error's first harmonic is its largest); failing any, the band of largest excess.
+    Its peak's line count (``SwingObs.line_peaks``, interpolated between FFT bins) is rounded
+    to a whole number. None when the observables carry no peaks.
+    """
+    best, key = None, None
+    for r, b in zip(reals, base):
+        peaks = getattr(r, 'line_peaks', None)
+        if peaks is None or len(peaks) == 0 or 'encoder_lines' not in r:
+            continue
+        ex = np.asarray(r['encoder_lines']) - np.asarray(b['encoder_lines'])
+        for k in range(ex.size):
+            rank = (ex[k] > LINE_EXCESS, r['encoder_lines'][k] if ex[k] > LINE_EXCESS else ex[k])
+            if key is None or rank > key:
+                best, key = float(np.round(peaks[k])), rank
+    return best
+
+
+def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> EffectSpace:
+    """``sp`` with ``lines`` started at the record's line and searchable within +-1 %."""
+    start = line_start(reals, base)
+    if start is None or start < 1:
+        return sp
+    lines = Param('lines', max(1.0, np.floor(0.99 * start)), np.ceil(1.01 * start),
+                  integer=True)
+    fixed = {k: v for k, v in sp.fixed.items() if k != 'lines'}
+    return EffectSpace(sp.name, list(sp.params) + [lines], fixed, {**sp.start, 'lines': start})
