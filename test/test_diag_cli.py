@@ -68,28 +68,58 @@ def test_diagnose_refuses_with_a_one_line_reason(tmp_path, capsys, args, message
     assert rc == 2 and message in err and len(err.strip().splitlines()) == 1
 
 
-def test_diagnose_swing_writes_the_contract_and_names_the_delay(tmp_path):
-    rec = tmp_path / 'rec'
-    cfg = tmp_path / 'g200.yaml'
-    cfg.write_text('gyro: {rate_hz: 200.0}\n')
+def _swing_bag(tmp_path, name, period, seed, effect):
+    cfg = tmp_path / f'{name}.yaml'
+    cfg.write_text(f'gyro: {{rate_hz: 200.0}}\nstand: {{period_s: {period}}}\n')
+    rec = tmp_path / name
     assert main(['simulate', 'swing', '--out', str(rec), '--duration', '60', '--config',
-                 str(cfg), '--effect', 'time_delay:delay_s=0.00185', '--quiet']) == 0
+                 str(cfg), '--seed', str(seed), '--effect', effect, '--quiet']) == 0
+    return str(rec / 'recording.mcap')
+
+
+def test_diagnose_swing_two_periods_and_a_holdout_write_the_contract(tmp_path):
+    # A 1.85 ms stamp delay on two runs of one gyro, at periods 5 s and 2.5 s (periods found
+    # from the encoders), and a third run at 5 s withheld from the fit.
+    effect = 'time_delay:delay_s=0.00185'
+    runs = [_swing_bag(tmp_path, n, p, s, effect)
+            for n, p, s in (('slow', 5.0, 3), ('fast', 2.5, 4), ('held', 5.0, 5))]
     out = tmp_path / 'out'
-    rc = main(['diagnose', '--kind', 'swing', str(rec / 'recording.mcap'), '--out', str(out),
-               '--repeats', '5', '--quiet'])
+    rc = main(['diagnose', '--kind', 'swing', runs[0], runs[1], '--holdout', runs[2],
+               '--out', str(out), '--repeats', '5', '--quiet'])
     assert rc == 0
     d = json.loads((out / 'diagnosis.json').read_text())
     assert CONTRACT <= set(d)
     assert d['kind'] == 'swing' and d['channel'] == 'gyro_x'
-    assert d['where'][0]['observable'] == 'quadrature'
-    assert d['where'][0]['range'] == pytest.approx([0.2, 0.2], rel=1e-4)
-    assert d['where'][0]['range_unit'] == 'Hz'
-    # On one period and amplitude a delay and g-sensitivity leave the same residual: the two
-    # lead the ranking (in either order) and the step says so, with the separating run.
-    pair = {'time_delay', 'g_sensitivity'}
-    assert {r['effect'] for r in d['ranking'][:2]} == pair
-    assert d['selected_effects'][0] in pair
-    assert set(d['ambiguous'][0]['effects']) == pair
-    assert 'second period' in d['ambiguous'][0]['separating_run']
-    assert d['baseline']['period_s']['value'] == pytest.approx(5.0, rel=1e-3)
-    assert (out / 'diagnosis_gyro_x.png').stat().st_size > 10_000
+    quad = [w for w in d['where'] if w['observable'] == 'quadrature']
+    assert sorted(w['record'] for w in quad) == [0, 1]
+    assert sorted(w['range'][0] for w in quad) == pytest.approx([0.2, 0.4], rel=1e-3)
+    assert all(w['excess'] < -5.0 and w['range_unit'] == 'Hz' for w in quad)
+    # Two periods tell the delay from g-sensitivity: no ambiguity, the delay alone.
+    assert d['selected_effects'] == ['time_delay'] and d['ambiguous'] == []
+    assert d['ranking'][0]['effect'] == 'time_delay'
+    assert d['steps'][0]['params']['delay_s'] == pytest.approx(0.00185, rel=0.25)
+    # Per record: period, amplitude and the Kalman scale factor the twin replaced by the
+    # pooled one.
+    recs = d['per_record']
+    assert [r['period_s'] for r in recs] == pytest.approx([5.0, 2.5], rel=1e-3)
+    ratio = recs[1]['peak_rate_rad_s'] / recs[0]['peak_rate_rad_s']
+    assert ratio == pytest.approx(2.0, rel=0.01)
+    pooled = d['baseline']['pooled_scale_factor_error']['value']
+    assert all(r['twin_scale_factor_error'] == pooled for r in recs)
+    lo, hi = sorted(r['kalman_scale_factor_error'] for r in recs)
+    assert lo <= pooled <= hi
+    # The withheld run: the model fitted on the other two shrinks its gap.
+    h = d['holdout']
+    assert h['final_gap'] < 0.6 * h['baseline_gap']
+    assert h['baseline_gap'] > h['null_gap_q95'] > h['final_gap']
+    assert [e['name'] for e in h['effects']] == ['time_delay']
+    for png in ('diagnosis_gyro_x.png', 'diagnosis_gyro_x_record2.png'):
+        assert (out / png).stat().st_size > 10_000
+
+
+def test_diagnose_swing_refuses_a_period_count_that_matches_no_record(tmp_path, capsys):
+    run = _swing_bag(tmp_path, 'r', 5.0, 3, 'time_delay:delay_s=0.001')
+    rc = main(['diagnose', '--kind', 'swing', run, run, '--period', '5,2.5,1',
+               '--out', str(tmp_path / 'o'), '--quiet'])
+    err = capsys.readouterr().err
+    assert rc == 2 and '--period' in err and len(err.strip().splitlines()) == 1

@@ -8,8 +8,13 @@ with the largest baseline gap at the top level, every channel under the extra ``
 field) and ``diagnosis_<channel>.png`` in ``--out``. ``--holdout INPUT`` re-measures, on a
 record the fit never saw, the gap of the baseline and of the baseline + the selected effects
 with their parameters fixed (only the baseline's white-noise level is refitted).
-``--kind swing`` diagnoses one swing record (IMU + encoder, ``--period`` or the encoder's
-dominant period) against twins of the paper's swing model (``gyro_char.diag_swing``).
+``--kind swing`` diagnoses one or several swing records of one gyro (IMU + encoder each;
+``--period`` once for all, once per record, or the encoder's dominant period) against twins of
+the paper's swing model (``gyro_char.diag_swing``): the effect parameters and the gyro's one
+scale-factor error are shared by the records, bias, drift and noise stay per record; the extra
+field ``per_record`` lists each record's own Kalman scale-factor estimate against its amplitude
+and period. ``--holdout`` then re-measures a withheld swing record with the effect parameters
+and the pooled scale factor frozen (its bias, drift and noise levels refitted).
 """
 import json
 import os
@@ -17,6 +22,7 @@ import sys
 
 from gyro_char.cli import add_common
 from gyro_char.recordings import GYRO_CHANNELS, InputError, read_imu
+import numpy as np
 
 
 def register(subparsers) -> None:
@@ -36,8 +42,10 @@ def register(subparsers) -> None:
                    help='analyse the first N samples of each record (default 131072)')
     p.add_argument('--seed', type=int, default=1)
     p.add_argument('--topic', default=None, help='sensor_msgs/Imu topic (bags)')
-    p.add_argument('--period', type=float, default=None, metavar='SECONDS',
-                   help='swing: the swing period (default: the dominant period of the encoder)')
+    p.add_argument('--period', default=None, metavar='SECONDS[,SECONDS...]',
+                   help='swing: the swing period, once for all records or comma-separated '
+                        'once per record (default: the dominant period of the encoder of each '
+                        'record)')
     p.add_argument('--axis', default=None,
                    help='swing: gyro axis along the swing axis (default: the one that swings)')
     p.add_argument('--encoder-topic', default=None,
@@ -110,41 +118,128 @@ def run(args) -> int:
     return 0
 
 
-def run_swing(args) -> int:
-    """``--kind swing``: one swing record (IMU + encoder) against its fitted twins."""
-    from gyro_char import diag_swing, diagnose
+def _swing_record(path, period, args):
+    """IMU, encoder and swing period of one swing input."""
     from gyro_char.recordings import read_encoder
-    from gyro_char.report.diagnose import plot_diagnosis
     from gyro_char.swing_align import dominant_period
 
-    if len(args.inputs) != 1 or args.holdout:
-        raise InputError('--kind swing takes one record (IMU + encoder) and no --holdout')
-    imu = read_imu(args.inputs[0], topic=args.topic, quiet=args.quiet)
-    enc = read_encoder(args.inputs[0], topic=args.encoder_topic, quiet=args.quiet)
+    imu = read_imu(path, topic=args.topic, quiet=args.quiet)
+    enc = read_encoder(path, topic=args.encoder_topic, quiet=args.quiet)
     for r in (imu, enc):
         for note in r.notes:
             print(f'note: {r.source}: {note}', file=sys.stderr)
-    period = args.period
     if period is None:
         if len(enc) < 16:
-            raise InputError('no encoder samples to find the swing period from; give --period')
+            raise InputError(f'{path}: no encoder samples to find the swing period from; '
+                             'give --period')
         period = dominant_period(enc.t - enc.t[0], enc.channels['encoder'])
-        print(f'note: swing period {period:.4g} s (dominant period of the encoder)',
+        print(f'note: {path}: swing period {period:.4g} s (dominant period of the encoder)',
               file=sys.stderr)
-    problem = diag_swing.swing_problem(imu, enc, period, axis=args.axis,
-                                       max_samples=args.max_samples)
+    return imu, enc, float(period)
+
+
+def _swing_periods(args) -> list:
+    n = len(args.inputs)
+    if args.period is None:
+        return [None] * n
+    try:
+        periods = [float(v) for v in args.period.split(',') if v.strip()]
+    except ValueError:
+        raise InputError(f'--period: not a number or comma-separated numbers: '
+                         f'{args.period!r}') from None
+    if not periods or not all(0 < v < float('inf') for v in periods):
+        raise InputError(f'--period must be positive seconds: {args.period!r}')
+    if len(periods) == 1:
+        return periods * n
+    if len(periods) != n:
+        raise InputError(f'--period takes one value for all records or one per record '
+                         f'({n}); got {len(periods)}')
+    return periods
+
+
+def run_swing(args) -> int:
+    """``--kind swing``: swing records (IMU + encoder) of one gyro against their twins."""
+    from dataclasses import replace
+
+    from gyro_char import diag_swing, diagnose
+    from gyro_char.report.diagnose import plot_diagnosis
+
+    periods = _swing_periods(args)
+    records = [_swing_record(p, per, args) for p, per in zip(args.inputs, periods)]
+    hold = None
+    if args.holdout:
+        # A single --period is the stand's for every run; per-record periods leave the
+        # held-out run's to its encoder.
+        once = periods[0] if args.period and ',' not in args.period else None
+        hold = _swing_record(args.holdout, once, args)
+    problem = diag_swing.swing_records_problem(records, axis=args.axis,
+                                               max_samples=args.max_samples)
     diag = diagnose.run(problem, repeats=args.repeats, seed=args.seed, quiet=args.quiet)
     out = diag.to_json()
-    ch = f'gyro_{problem.context.axis}'
+    bases = problem.context
+    ch = f'gyro_{bases[0].axis}'
     out['channel'] = ch
+    out['per_record'] = per_record(args.inputs, bases)
+    if hold is not None:
+        out['holdout'] = swing_holdout_check(diag, hold, bases, args)
     os.makedirs(args.out, exist_ok=True)
-    plot_diagnosis(diag, problem.ranges[0], os.path.join(args.out, f'diagnosis_{ch}.png'),
-                   title=f'{ch}: swing sim-to-real gap (period {period:.4g} s)')
+    pngs = []
+    for i, b in enumerate(bases):
+        # One figure per record: the engine's plot shows its first record.
+        view = replace(diag, reals=[diag.reals[i]], evaluations={
+            k: replace(ev, stats=[ev.stats[i]]) for k, ev in diag.evaluations.items()})
+        pngs.append(f'diagnosis_{ch}.png' if i == 0 else f'diagnosis_{ch}_record{i + 1}.png')
+        plot_diagnosis(view, problem.ranges[i], os.path.join(args.out, pngs[-1]),
+                       title=f'{ch}: swing sim-to-real gap, record {i + 1} (period '
+                             f'{b.period_s:.4g} s, amplitude {b.amplitude:.3g} rad)')
     with open(os.path.join(args.out, 'diagnosis.json'), 'w') as fh:
         json.dump(out, fh, indent=2)
     print(summary(ch, out))
-    print(f'wrote {args.out}/diagnosis.json and diagnosis_{ch}.png')
+    print(f'wrote {args.out}/diagnosis.json and {", ".join(pngs)}')
     return 0
+
+
+def per_record(sources, bases) -> list:
+    """Each record's own Kalman scale-factor estimate against its amplitude and period."""
+    return [{'source': str(src), 'period_s': b.period_s, 'amplitude_rad': b.amplitude,
+             'peak_rate_rad_s': b.peak_rate,
+             'kalman_scale_factor_error': b.record_scale_factor_error,
+             'kalman_scale_factor_sigma': b.record_scale_factor_sigma,
+             'twin_scale_factor_error': b.scale_factor_error}
+            for src, b in zip(sources, bases)]
+
+
+def swing_holdout_check(diag, hold, bases, args) -> dict:
+    """
+    Gap of the baseline and of the selected model on a swing record the fit never saw.
+
+    The effect parameters and the pooled scale-factor error are frozen; the record's own bias,
+    drift, noise levels, amplitude and period are refitted (they change from run to run).
+    """
+    from gyro_char import diag_gap, diag_swing
+    from gyro_char.diag_fit import GapObjective
+    from gyro_char.diagnose import excess_gap
+
+    imu, enc, period = hold
+    problem = diag_swing.swing_records_problem(
+        [(imu, enc, period)], axis=bases[0].axis, max_samples=args.max_samples,
+        scale_factor=bases[0].scale_factor_error)
+    seeds = [args.seed * 1000 + 500 + k for k in range(args.repeats)]
+    objective = GapObjective(problem.reals, problem.simulate, seeds)
+    base = objective.evaluate([])
+    objective.set_reference(base)
+    final = objective.evaluate(list(diag.model))
+    null = diag_gap.null_gaps(base.stats)
+    b = problem.context[0]
+    return {'baseline_gap': base.gap, 'final_gap': final.gap,
+            'null_gap_q95': float(np.quantile(null, 0.95)),
+            'baseline_excess': excess_gap(base.gap, null),
+            'final_excess': excess_gap(final.gap, null),
+            'effects': [{'name': n, 'params': p} for n, p in diag.model],
+            'record': {'period_s': b.period_s, 'amplitude_rad': b.amplitude,
+                       'kalman_scale_factor_error': b.record_scale_factor_error},
+            'note': 'effect parameters and the pooled scale-factor error fixed from the fit; '
+                    'bias, drift and noise levels of the record are refitted'}
 
 
 def holdout_check(diag, x, dt, channel, args) -> dict:
@@ -177,6 +272,11 @@ def summary(channel: str, out: dict) -> str:
     for a in out['ambiguous']:
         lines.append(f'  ambiguous: {" / ".join(a["effects"])}; separating run: '
                      f'{a["separating_run"]}')
+    for i, r in enumerate(out.get('per_record', [])):
+        lines.append(f'  record {i + 1}: period {r["period_s"]:.4g} s, amplitude '
+                     f'{r["amplitude_rad"]:.4g} rad, peak rate {r["peak_rate_rad_s"]:.4g} rad/s: '
+                     f'Kalman scale-factor error {r["kalman_scale_factor_error"]:+.3e} '
+                     f'+- {r["kalman_scale_factor_sigma"]:.1e}')
     if 'holdout' in out:
         h = out['holdout']
         lines.append(f'  held-out record: baseline gap {h["baseline_gap"]:.2f} -> '
