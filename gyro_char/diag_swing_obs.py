@@ -227,7 +227,7 @@ def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: n
 
 def encoder_sigma_from(sigma: float, real: dict, twin: dict) -> float:
     """
-    Encoder white noise that gives a twin the record's slow-swing increments (rad).
+    Return the encoder white noise (rad) that gives a twin the record's slow-swing increments.
 
     The swing filter's encoder noise lumps every encoder error in; a cyclic error or stamp
     jitter inflates it (8x for 5e-5 rad of cyclic error on a 3e-6 rad encoder), and the
