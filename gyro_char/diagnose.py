@@ -46,11 +46,13 @@ SEPARATING_RUNS = {
     frozenset({'temperature_drift', 'bias_instability'}):
         'a repeat static record after a full warm-up (or with the temperature logged)',
     frozenset({'time_delay', 'g_sensitivity'}):
-        'repeat at a second period or amplitude: the residual of a delay scales with A·ω, that '
-        'of g-sensitivity with the gravity projection, independent of ω',
+        'repeat at a second swing period (e.g. half; a second amplitude alone scales both '
+        'alike) and diagnose both runs together: the cos θ residual of a delay scales as A·ω, '
+        'that of g-sensitivity as g·A/ω',
     frozenset({'scale_factor_asymmetry', 'scale_factor_nonlinearity'}):
-        'repeat at a second amplitude: the 2f line of an asymmetry grows as the peak rate, that '
-        'of a quadratic term as its square',
+        'repeat at a second amplitude or period (another peak rate A·ω) and diagnose both runs '
+        'together: the 2f line of an asymmetry grows as the peak rate, that of a quadratic '
+        'term as its square',
     frozenset({'vibration', 'gauss_markov'}):
         'a longer record with finer frequency resolution: a tone keeps a constant width, a '
         'resonant process does not',
