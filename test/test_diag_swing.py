@@ -9,8 +9,9 @@ RATE_HZ = 200.0  # a 5 ms gyro step (the paper's MEMS runs: 2-3 ms); encoder at 
 DURATION = 60.0
 
 
-def _record(effects, seed):
-    cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': RATE_HZ}})
+def _record(effects, seed, period=5.0):
+    cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': RATE_HZ},
+                                                'stand': {'period_s': period}})
     effects = [{'name': n, 'params': p} for n, p in effects]
     run = bench_sim.simulate_swing(cfg, duration=DURATION, seed=seed, effects=effects,
                                    channels=('gyro_x',))
@@ -48,7 +49,7 @@ def test_fractional_sample_delay_is_found_and_flagged_against_g_sensitivity():
     assert diag.selected_effects[0] in pair
     amb = diag.ambiguous[0]
     assert set(amb['effects']) == pair
-    assert 'second period or amplitude' in amb['separating_run']
+    assert 'second swing period' in amb['separating_run']
     assert diag.where[0]['observable'] == 'quadrature'
     fitted = next(r for r in diag.ranking if r['effect'] == 'time_delay')
     assert fitted['params']['delay_s'] == pytest.approx(d, rel=0.35)
@@ -80,3 +81,47 @@ def test_baseline_takes_the_kalman_estimates():
     assert base.scale_factor_error == est.scale_factor_error.value
     assert base.dt == pytest.approx(1.0 / RATE_HZ, rel=1e-4)
     assert base.amplitude == pytest.approx(20.0 * np.pi / 180.0, rel=1e-3)
+
+
+def test_two_periods_tell_g_sensitivity_from_a_delay():
+    # The same g-sensitivity on runs at 5 s and 2.5 s: its cos θ residual goes as A / ω, a
+    # delay's as A ω, so no delay fits both runs - one run alone is ambiguous (see above).
+    gy = 5e-4
+    runs = [(*_record([('g_sensitivity', {'gy': gy})], 45 + k, per), per)
+            for k, per in enumerate((5.0, 2.5))]
+    problem = diag_swing.swing_records_problem(runs)
+    diag = diagnose.run(problem, repeats=5, seed=45)
+    assert diag.selected_effects == ['g_sensitivity'] and diag.ambiguous == []
+    by = {r['effect']: r['gap_after'] for r in diag.ranking}
+    assert by['time_delay'] > by['g_sensitivity'] + 3 * diag.null_gap['std']
+    assert diag.steps[0]['params']['gy'] == pytest.approx(gy, rel=0.3)
+    assert diag.final_gap < diag.null_gap['final_model_q95']
+    # One gyro, one scale factor: both twins get the pooled Kalman estimate.
+    pooled, _ = diag_swing.pooled_scale_factor(problem.context)
+    assert [b.scale_factor_error for b in problem.context] == [pooled, pooled]
+    assert len({b.record_scale_factor_error for b in problem.context}) == 2
+
+
+def test_scale_factor_shift_measures_a_cubic_term_across_peak_rates():
+    # k3 ω³ gives an apparent scale-factor error 3 k3 W² / 4 at peak rate W: the shift between
+    # runs at 5 s and 2.5 s (W doubles) is 3 k3 (W2² - W1²) / 4; without k3 it is noise.
+    k3 = 0.1
+    scales, rates = {}, []
+    for per in (5.0, 2.5):
+        for k in (0.0, k3):
+            imu, enc = _record([('scale_factor_nonlinearity', {'k2': 0.0, 'k3': k})], 46, per)
+            scales[per, k] = diag_swing.record_scale(imu, enc, 'x')
+        rates.append(diag_swing.fit_baseline(imu, enc, per).peak_rate)
+    expected = 0.75 * k3 * (rates[1] ** 2 - rates[0] ** 2)
+    assert scales[2.5, k3] - scales[5.0, k3] == pytest.approx(expected, rel=0.05)
+    assert abs(scales[2.5, 0.0] - scales[5.0, 0.0]) < 0.02 * expected
+
+
+def test_pooled_scale_factor_is_the_inverse_variance_mean():
+    imu, enc = _record([], 47)
+    b = diag_swing.fit_baseline(imu, enc, 5.0)
+    b1 = diag_swing.replace(b, record_scale_factor_error=b.record_scale_factor_error + 3e-4,
+                            record_scale_factor_sigma=2 * b.record_scale_factor_sigma)
+    sf, sig = diag_swing.pooled_scale_factor([b, b1])
+    assert sf == pytest.approx(b.record_scale_factor_error + 3e-4 / 5, rel=1e-9)
+    assert sig == pytest.approx(b.record_scale_factor_sigma / np.sqrt(1.25), rel=1e-9)
