@@ -171,11 +171,14 @@ def main(argv=None) -> int:
                      'selected': d.selected_effects, 'top1': top1,
                      'baseline_gap': d.baseline_gap, 'final_gap': d.final_gap,
                      'null_mean': d.null_gap['mean'],
+                     'baseline_excess': d.baseline_excess, 'final_excess': d.final_excess,
                      'ambiguous': d.ambiguous})
         print(f'{label:40s} seed {seed} level {rows[-1]["level"]} gap '
               f'{d.baseline_gap:7.2f} -> {d.final_gap:6.2f} (null q95 '
-              f'{d.null_gap["q95"]:.2f}) selected {d.selected_effects} '
-              f'[{time.time() - t0:.0f} s]', flush=True)
+              f'{d.null_gap["q95"]:.2f}; final model vs itself '
+              f'{d.null_gap["final_model_mean"]:.2f}) selected {d.selected_effects} '
+              + ''.join(f'(ambiguous {a["effects"]}) ' for a in d.ambiguous)
+              + f'[{time.time() - t0:.0f} s]', flush=True)
     report(rows)
     return 0
 
@@ -209,13 +212,20 @@ def report(rows) -> None:
         shrink = [1.0 - r['final_gap'] / r['baseline_gap'] for r in hit]
         excess = [(r['baseline_gap'] - r['final_gap']) / (r['baseline_gap'] - r['null_mean'])
                   for r in hit]
+        # diagnose.excess_gap: the gap above the null level, in quadrature.
+        quad = [1.0 - r['final_excess'] / r['baseline_excess'] for r in hit]
         print(f'median gap shrink over detected cases: 1 - final/baseline '
               f'{100.0 * float(np.median(shrink)):.0f} %; share of the excess over the '
-              f'sim-vs-itself level removed {100.0 * float(np.median(excess)):.0f} %')
+              f'sim-vs-itself level removed {100.0 * float(np.median(excess)):.0f} %; '
+              f'1 - final_excess/baseline_excess {100.0 * float(np.median(quad)):.0f} %')
     pairs = [r for r in rows if len(r['truth']) == 2]
     if pairs:
         both = [r for r in pairs if set(r['truth']) <= set(r['selected'])]
         print(f'pairs: both effects selected in {len(both)}/{len(pairs)}')
+        for r in pairs:
+            print(f'  {"+".join(r["truth"])} seed {r["seed"]}: selected {r["selected"]}'
+                  + (f', ambiguous {[a["effects"] for a in r["ambiguous"]]}'
+                     if r['ambiguous'] else ''))
     clean_rows = [r for r in rows if not r['truth']]
     fa = [r for r in clean_rows if r['selected']]
     print(f'false alarms on clean baseline records: {len(fa)}/{len(clean_rows)}'

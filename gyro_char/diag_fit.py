@@ -27,7 +27,9 @@ class Param:
     One searched parameter: bounds of its magnitude, scale, sign, and whether it is whole.
 
     A whole-number parameter is searched over every value in [lo, hi] on the grid (no Brent
-    refinement); ``sign`` = -1 searches the magnitude of a negative parameter.
+    refinement); ``sign`` = -1 searches the magnitude of a negative parameter. A ``choice`` is
+    a whole-number structural parameter (a filter's number of stages, a process's order) that
+    changes what the other parameters mean: they are fitted anew for each of its values.
     """
 
     name: str
@@ -36,6 +38,7 @@ class Param:
     log: bool = True
     integer: bool = False
     sign: float = 1.0
+    choice: bool = False
 
 
 @dataclass
@@ -96,23 +99,41 @@ def _from_u(p: Param, u: float) -> float:
 
 def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *,
                grid: int = 5, refine: int = 4, passes: int = 1,
-               near: Optional[dict] = None) -> Tuple[dict, Evaluation]:
+               near: Optional[dict] = None, at: Optional[int] = None) -> Tuple[dict, Evaluation]:
     """
     Best parameters of ``space`` added on top of ``selected``, and the evaluation there.
 
     ``near``: parameters of an earlier fit of the same effect; the search then covers only
     one coarse grid cell either side of them (3 points), which is what a later greedy step
-    needs when the effects already selected change the picture only a little.
-    Cost: about ``passes * len(params) * (grid + refine)`` evaluations of the objective.
+    needs when the effects already selected change the picture only a little. ``at``: the
+    position in ``selected`` where the effect goes (default: last); an effect's random numbers
+    follow its position, so a refit in place keeps the common random numbers.
+    Cost: about ``passes * len(params) * (grid + refine)`` evaluations of the objective, times
+    the number of values of a ``choice`` parameter (with ``near``, the choice is kept).
     """
+    choices = [p for p in space.params if p.choice]
+    if choices:
+        p = choices[0]
+        rest = [q for q in space.params if q is not p]
+        values = ([near[p.name]] if near and p.name in near
+                  else np.arange(int(p.lo), int(p.hi) + 1, dtype=float))
+        fits = [fit_effect(objective, selected,
+                           EffectSpace(space.name, rest, {**space.fixed, p.name: float(v)},
+                                       space.start),
+                           grid=grid, refine=refine, passes=passes, near=near, at=at)
+                for v in values]
+        return min(fits, key=lambda f: f[1].gap)
     values = {p.name: space.start.get(p.name, _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi))))
               for p in space.params}
     if near:
         values.update({k: v for k, v in near.items() if k in values})
     best = None
 
+    pos = len(selected) if at is None else at
+
     def run(vals: dict) -> Evaluation:
-        return objective.evaluate(list(selected) + [(space.name, {**space.fixed, **vals})])
+        return objective.evaluate(list(selected[:pos]) + [(space.name, {**space.fixed, **vals})]
+                                  + list(selected[pos:]))
 
     for _ in range(passes):
         for p in space.params:

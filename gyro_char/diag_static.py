@@ -191,17 +191,19 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
     k_long = sig_long / np.sqrt(tau_max)
     spaces = {
-        # Bartlett (2-stage) averaging at 8x the output rate (taps = 1 would be the baseline,
-        # but the catalogue's filter refuses a 1-tap kernel).
+        # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
+        # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline.
         'internal_lowpass': EffectSpace('internal_lowpass', [
-            Param('taps', 2, 32, integer=True)], fixed={'stages': 2.0, 'decimation': 8.0}),
+            Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
+            fixed={'decimation': 8.0}),
         'bias_instability': EffectSpace('bias_instability', [
             Param('B', 0.1 * sig_long, 30.0 * sig_long)]),
         'rate_random_walk': EffectSpace('rate_random_walk', [
             Param('K', 0.1 * k_long, 30.0 * k_long)]),
         'gauss_markov': EffectSpace('gauss_markov', [
             Param('sigma', 0.1 * sig_long, 2.0 * sig_sample),
-            Param('tau_s', 3 * dt, length / 4)]),
+            Param('tau_s', 3 * dt, length / 4),
+            Param('order', 1, 2, integer=True, choice=True)]),
         'quantization': EffectSpace('quantization', [
             Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt))]),
         'temperature_drift': EffectSpace('temperature_drift', [

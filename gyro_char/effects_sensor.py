@@ -179,22 +179,30 @@ class RateRandomWalk(_NoiseTerm):
 
 @register
 class GaussMarkov(Effect):
-    """First-order Gauss-Markov (exponentially correlated) rate noise."""
+    """Gauss-Markov (exponentially correlated) rate noise, first or second order."""
 
     name = 'gauss_markov'
     summary = 'exponentially correlated rate noise (a bump in the Allan curve near 1.9 tau_c)'
     physics = ('x_k = a x_(k-1) + sigma sqrt(1 - a^2) w_k, a = exp(-dt / tau_s), stationary '
                'from the first sample: autocorrelation sigma^2 exp(-|lag| / tau_s); Allan '
                'variance (q tau_c^2 / tau) [1 - tau_c / (2 tau) (3 - 4 e^(-tau/tau_c) + '
-               'e^(-2 tau/tau_c))] with q = 2 sigma^2 / tau_c.')
+               'e^(-2 tau/tau_c))] with q = 2 sigma^2 / tau_c. order = 2: two such stages in '
+               'cascade (the critically damped second-order Gauss-Markov model, whose PSD '
+               'falls as f^-4 above 1 / (2 pi tau_s): a process with inertia, e.g. a '
+               'resonance-driven or twice-filtered disturbance), scaled to standard deviation '
+               'sigma, autocorrelation (1 + |lag| / tau_s) exp(-|lag| / tau_s) in the '
+               'continuous limit; also stationary from the first sample.')
     PARAMS = {'sigma': (0.01 * DEG, 'rad/s', 'stationary standard deviation'),
               'tau_s': (10.0, 's', 'correlation time'),
-              'axis': _axis_param()}
+              'axis': _axis_param(),
+              'order': (1.0, '-', '1: first order, 2: two first-order stages in cascade')}
 
     def check(self):
         _rows(self)
         if self.sigma < 0 or self.tau_s <= 0:
             raise InputError('gauss_markov: sigma >= 0 and tau_s > 0')
+        if self.order not in (1.0, 2.0):
+            raise InputError('gauss_markov: order must be 1 or 2')
 
     def sensor(self, ctx, gyro, accel):
         a = np.exp(-ctx.dt_internal / self.tau_s)
@@ -203,10 +211,32 @@ class GaussMarkov(Effect):
         n = gyro.shape[1]
         for r in _rows(self):
             w = rng.standard_normal(n)
+            if int(self.order) == 2:
+                gyro[r] += self.sigma * second_order_gm(a, w, rng)
+                continue
             w[0] /= np.sqrt(1.0 - a * a)     # stationary start
             x = signal.lfilter([1.0], [1.0, -a], w)
             gyro[r] += self.sigma * np.sqrt(1.0 - a * a) * x
         return gyro, accel
+
+
+def second_order_gm(a: float, w: np.ndarray, rng) -> np.ndarray:
+    """
+    Return unit-variance s2 of s1_k = a s1_(k-1) + w_k, s2_k = a s2_(k-1) + s1_k, stationary.
+
+    The initial state (s1_0, s2_0) is drawn from the cascade's stationary covariance (discrete
+    Lyapunov equation of A = [[a, 0], [a, a]], Q = [[1, 1], [1, 1]]), so no burn-in is needed
+    even for correlation times longer than the record.
+    """
+    v1 = 1.0 / (1.0 - a * a)
+    # P11 = v1, P12 = (a^2 v1 + 1) / (1 - a^2) = v1^2, P22 = (1 + a^2) / (1 - a^2)^3.
+    c12 = v1 * v1
+    v2 = v1 * v1 * v1 * (1.0 + a * a)
+    chol = np.linalg.cholesky(np.array([[v1, c12], [c12, v2]]))
+    s0 = chol @ rng.standard_normal(2)
+    s1 = signal.lfilter([1.0], [1.0, -a], w[1:], zi=[a * s0[0]])[0]
+    s2 = signal.lfilter([1.0], [1.0, -a], s1, zi=[a * s0[1]])[0]
+    return np.r_[s0[1], s2] / np.sqrt(v2)
 
 
 @register
