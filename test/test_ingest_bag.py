@@ -125,7 +125,7 @@ def _same_encoder(path, **kw):
     fast = read_encoder_bag(Path(path), quiet=True, **kw)
     slow = read_encoder_bag(Path(path), quiet=True, fast=False, **kw)
     assert np.array_equal(fast.t, slow.t)
-    assert np.array_equal(fast.channels['encoder'], slow.channels['encoder'])
+    assert np.array_equal(fast.channels['encoder'], slow.channels['encoder'], equal_nan=True)
     assert fast.notes == slow.notes
     return fast
 
@@ -168,3 +168,78 @@ def test_compressed_bags(tmp_path, storage, compression):
     fast = read_imu_bag(Path(path))
     _same(fast, read_imu_bag(Path(path), fast=False))
     assert np.array_equal(fast.channels['accel_x'], rec.channels['accel_x'])
+
+
+def _malformed_joint_bag(path, storage):
+    """Write a JointState topic of good, NaN, empty, nameless, truncated, foreign payloads."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    t0 = 1.7e9
+    good = [joint_msg(t0 + k, ['stand_joint'], [0.1 * k]) for k in range(6)]
+    payloads = [bytes(STORE2.serialize_cdr(m, 'sensor_msgs/msg/JointState')) for m in good]
+    odd = {
+        'nan': [joint_msg(t0 + 10, ['stand_joint'], [np.nan])],
+        'missing': [joint_msg(t0 + 11, [], []), joint_msg(t0 + 12, ['other'], [1.0]),
+                    joint_msg(t0 + 13, ['stand_joint'], [])],  # a name without a position
+        'bad': [payloads[0][:len(payloads[0]) // 2], b'\x00\x01\x00\x00\xff'],
+    }
+    raws = payloads[:3] + [bytes(STORE2.serialize_cdr(m, 'sensor_msgs/msg/JointState'))
+                           for m in odd['nan'] + odd['missing']] + odd['bad'] + payloads[3:]
+    # a Vector3Stamped payload on the JointState topic: judged the same way by both paths
+    raws.append(bytes(STORE2.serialize_cdr(vector3_msg(t0 + 20, 1.0),
+                                           'geometry_msgs/msg/Vector3Stamped')))
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    with Writer(Path(path), version=9, storage_plugin=plugin) as writer:
+        conn = writer.add_connection('/js', 'sensor_msgs/msg/JointState', typestore=STORE2)
+        for k, raw in enumerate(raws):
+            writer.write(conn, int(t0 * 1e9) + k, raw)
+    return len(raws)
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_malformed_joint_states_counted_alike_by_both_paths(tmp_path, storage):
+    n = _malformed_joint_bag(tmp_path / 'm', storage)
+    good = 0.1 * np.arange(6)
+    # by index, the joint named 'other' is joint 0 of its message
+    for joint, want in (('stand_joint', good), (0, np.insert(good, 3, 1.0))):
+        got = _same_encoder(tmp_path / 'm', joint=joint)  # fast path == rosbags path, notes too
+        values = got.channels['encoder']
+        assert np.array_equal(values[~np.isnan(values)], want)
+        assert np.isnan(values).sum() == 1  # a NaN position is a reading, left to sanitize
+        counts = {k: int(next((n.split()[0] for n in got.notes if word in n), 0))
+                  for k, word in (('bad', 'undecodable'), ('missing', 'without joint'))}
+        assert counts['bad'] >= 2 and counts['bad'] + counts['missing'] + len(got) == n
+    clean = read_encoder(str(tmp_path / 'm'), joint='stand_joint', quiet=True)  # sanitised
+    assert np.array_equal(clean.channels['encoder'], good)
+
+
+def test_one_rule_for_malformed_messages():
+    from types import SimpleNamespace as Ns
+
+    from gyro_char.ingest.encoder_read import _Samples
+    from msg_adapters import joint_angle
+    stamp = Ns(sec=5, nanosec=0)
+
+    def js(**kw):
+        fields = {'header': Ns(stamp=stamp), 'name': ['j'], 'position': [0.5]}
+        fields.update(kw)
+        return Ns(**fields)
+    for joint in ('j', 0):
+        out = _Samples(lambda m: joint_angle(m, joint))
+        wrong = [js(position=None), js(position=['abc']), js(position=[[1.0, 2.0]]),
+                 js(header=None), js(header=Ns(stamp=Ns(sec='x', nanosec=0))),
+                 js(header=Ns(stamp=Ns(sec=np.array([1, 2]), nanosec=0))),
+                 js(header=Ns(stamp=Ns(sec=np.inf, nanosec=0)))]
+        if joint == 'j':
+            wrong.append(js(name=5))
+        for msg in wrong + [None]:
+            out.take(msg)
+        out.take(b'\x00', lambda raw: STORE2.deserialize_cdr(raw, 'sensor_msgs/msg/JointState'))
+        assert out.bad == len(wrong) + 2
+        for msg in (js(name=[], position=[]), js(position=[])):
+            out.take(msg)
+        assert out.missing == 2
+        out.take(js(position=[np.nan]))
+        out.take(js())
+        out.flush()
+        assert np.array_equal(np.concatenate(out.ts), [5.0, 5.0])
+        assert np.isnan(out.vs[0][0]) and out.vs[0][1] == 0.5
