@@ -1,0 +1,155 @@
+"""
+Ground truth for the swing diagnosis's encoder blocks (line-locked, rate-locked, whiteness).
+
+Records: the bench simulator's ADIS16405 swing (gyro 200 Hz, encoder 1 kHz, 60 s) as in
+``bench/validate_diagnosis_swing.py``; encoder errors added either through the catalogue
+(known parameters) or, for the blind diagnoses, with the validation harness's OTHER shapes
+(1st + 3rd harmonic cyclic error on 1000 lines, uniform encoder stamp errors).
+"""
+from gyro_char import bench_sim, diag_swing, diag_swing_obs, diagnose
+from gyro_char.diag_fit import EffectSpace, Param
+from gyro_char.diag_swing_spaces import line_start, with_lines
+from gyro_char.recordings import ENCODER_CHANNEL, Recording
+from gyro_char.sim_config import BenchConfig
+import numpy as np
+import pytest
+
+PERIOD = 5.0
+
+
+def _cfg():
+    return BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': 200.0}})
+
+
+def _record(seed=11, effects=()):
+    run = bench_sim.simulate_swing(_cfg(), duration=60.0, seed=seed, effects=effects,
+                                   channels=('gyro_x',))
+    return run.imu, run.encoder
+
+
+def _obs(imu, enc):
+    lay = diag_swing_obs.layout(len(imu), 0.005, PERIOD)
+    return diag_swing_obs.swing_observables(imu.t, imu.channels['gyro_x'], enc.t,
+                                            enc.channels[ENCODER_CHANNEL], PERIOD, lay)
+
+
+def _harness_cyclic(enc, a1=5e-5, a3=2e-5):
+    phi = enc.channels[ENCODER_CHANNEL]
+    e = phi + a1 * np.sin(1000 * phi + 0.4) + a3 * np.sin(3000 * phi + 1.1)
+    return Recording(enc.t, {ENCODER_CHANNEL: e}, enc.source)
+
+
+def _harness_jitter(enc, half_width=1e-4, seed=5):
+    rng = np.random.default_rng(seed)
+    return Recording(enc.t + rng.uniform(-half_width, half_width, enc.t.size),
+                     dict(enc.channels), enc.source)
+
+
+def _band(lines):
+    return int(np.searchsorted(diag_swing_obs.LINE_EDGES, lines, side='right')) - 1
+
+
+def test_line_spectrum_reads_line_count_and_amplitude():
+    t = np.arange(0.0, 60.0, 1e-3)
+    phi = 0.35 * np.sin(2 * np.pi * t / PERIOD) + 0.001
+    rng = np.random.default_rng(3)
+    r = 3e-5 * np.sin(777.0 * phi + 0.9) + 2e-5 * rng.standard_normal(t.size)
+    lines, amp = diag_swing_obs.line_spectrum(phi, r)
+    peaks, where = diag_swing_obs.band_peaks(lines, amp)
+    b = _band(777.0)
+    assert abs(where[b] - 777.0) < 0.5
+    assert peaks[b] == pytest.approx(3e-5, rel=0.1)
+    # No leakage into the other bands but the top one: where the swing is fastest, 1 kHz
+    # samples the angle every 4.4e-4 rad, so the line's alias about 2 pi / 4.4e-4 = 14300
+    # lines is real (twins have it alike).
+    assert all(p < 0.05 * peaks[b] for k, p in enumerate(peaks[:-1]) if k != b)
+    assert peaks[-1] < 0.3 * peaks[b]
+
+
+@pytest.fixture(scope='module')
+def clean():
+    imu, enc = _record()
+    return imu, enc, _obs(imu, enc)
+
+
+def test_catalogue_cyclic_error_peaks_at_its_line_count(clean):
+    imu, enc, o0 = clean
+    fx = [{'name': 'encoder_cyclic_error', 'params': {'lines': 2048.0, 'a1': 3e-5, 'a2': 1e-5}}]
+    o = _obs(*_record(effects=fx))
+    for lines, a in ((2048, 3e-5), (4096, 1e-5)):
+        b = _band(lines)
+        assert abs(o.line_peaks[b] - lines) < 1.0
+        assert 10 ** o['encoder_lines'][b] == pytest.approx(a, rel=0.15)
+        assert o['encoder_lines'][b] > o0['encoder_lines'][b] + 0.5
+
+
+def test_harness_cyclic_error_peaks_at_1000_and_3000(clean):
+    imu, enc, o0 = clean
+    o = _obs(imu, _harness_cyclic(enc))
+    for lines, a in ((1000, 5e-5), (3000, 2e-5)):
+        b = _band(lines)
+        assert abs(o.line_peaks[b] - lines) < 1.0
+        assert 10 ** o['encoder_lines'][b] == pytest.approx(a, rel=0.15)
+    # The data-driven start of the line count: the strongest line standing out of the twin.
+    sp = EffectSpace('encoder_cyclic_error', [Param('a1', 1e-6, 1e-3)], fixed={'a2': 0.0})
+    assert line_start([o], [o0]) == 1000.0
+    started = with_lines(sp, [o], [o0])
+    assert started.start == {'lines': 1000.0}
+    assert [p.name for p in started.params] == ['a1', 'lines']
+    # No line in a clean record: whatever the start, no band stands out.
+    assert np.all(np.abs(o0['encoder_lines'] - _obs(*_record(seed=12))['encoder_lines']) < 0.4)
+
+
+def test_rate_locked_reads_encoder_stamp_jitter(clean):
+    imu, enc, o0 = clean
+    sigma = 6e-5
+    o = _obs(*_record(effects=[{'name': 'timestamp_jitter',
+                                'params': {'sigma_s': sigma, 'stream': 1.0}}]))
+    apparent = np.sqrt(np.sinh(o['rate_locked'])) * diag_swing_obs.STAMP_UNIT
+    assert np.all(np.abs(apparent / sigma - 1.0) < 0.2), apparent
+    # Without stamp errors no bin carries rate-borne noise above (10 µs)^2 (flat in rate).
+    assert np.all(np.sinh(o0['rate_locked']) < 100.0), o0['rate_locked']
+    # The harness's uniform stamp errors of half width w: sigma = w / sqrt(3).
+    oh = _obs(imu, _harness_jitter(enc, 3e-4))
+    apparent = np.sqrt(np.sinh(oh['rate_locked'])) * diag_swing_obs.STAMP_UNIT
+    assert np.all(np.abs(apparent / (3e-4 / np.sqrt(3)) - 1.0) < 0.2), apparent
+
+
+def test_encoder_sigma_from_removes_encoder_errors(clean):
+    imu, enc, o0 = clean
+    rec = (imu, _harness_cyclic(enc))
+    base = diag_swing.fit_baseline(*rec, PERIOD)
+    real = _obs(*rec)
+    sigma = base.encoder_sigma
+    assert sigma > 5 * 5e-6  # the filter lumps the cyclic error into the white noise
+    for s in (901, 902):
+        imu_t, enc_t = diag_swing.simulate_twin(base, [], s)
+        sigma = diag_swing_obs.encoder_sigma_from(sigma, real, _obs(imu_t, enc_t))
+        base.encoder_sigma = sigma
+    clean_sigma = diag_swing.fit_baseline(imu, enc, PERIOD).encoder_sigma
+    assert sigma < 1.5 * clean_sigma
+
+
+def _diagnose(imu, enc, seed):
+    # Every candidate is fitted (blind); one greedy step: the first selection is under test.
+    return diagnose.run(diag_swing.swing_problem(imu, enc, PERIOD), repeats=4, seed=seed,
+                        max_steps=1)
+
+
+def test_blind_harness_cyclic_error_found_with_its_line_count(clean):
+    imu, enc, _ = clean
+    d = _diagnose(imu, _harness_cyclic(enc), 28)
+    assert d.selected_effects[:1] == ['encoder_cyclic_error']
+    assert d.steps[0]['params']['lines'] == pytest.approx(1000.0, rel=0.01)
+    assert d.final_gap < 0.6 * d.baseline_gap
+
+
+def test_blind_harness_jitter_found(clean):
+    imu, enc, _ = clean
+    d = _diagnose(imu, _harness_jitter(enc), 29)
+    assert d.selected_effects[:1] == ['timestamp_jitter']
+
+
+def test_blind_clean_record_selects_nothing():
+    d = _diagnose(*_record(seed=13), 30)
+    assert d.selected_effects == []
