@@ -204,8 +204,10 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             Param('sigma', 0.1 * sig_long, 2.0 * sig_sample),
             Param('tau_s', 3 * dt, length / 4),
             Param('order', 1, 2, integer=True, choice=True)]),
+        # Plain (angle error correlated when the step is coarse) or dithered (white error).
         'quantization': EffectSpace('quantization', [
-            Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt))]),
+            Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt)),
+            Param('dither', 0, 1, integer=True, choice=True)]),
         'temperature_drift': EffectSpace('temperature_drift', [
             Param('amplitude', 0.3 * sig_long, 3.0 * sig_sample, sign=warm_sign),
             Param('tau_s', length / 200, length / 2)]),

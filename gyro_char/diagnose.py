@@ -12,8 +12,8 @@ twins of those records under a list of effects, and the candidate effects' searc
 3. fits every candidate effect alone (``ranking``);
 4. adds effects greedily while the best one shrinks the gap by more than ``2 σ_null`` and the
    gap is still above the null's 95th percentile (``steps``, ``selected_effects``); every step
-   is judged in the scatter of the current model's twins (the first in the baseline's), while
-   the reported gaps stay in the baseline's scatter;
+   is judged in the baseline's scatter widened where the current model's twins scatter more
+   (a noise process), while the reported gaps stay in the baseline's scatter;
 5. flags a step as ambiguous when other candidates shrink the gap as much within ``2 σ_null``
    (or within the spread of the candidates' own gaps, for effects that add variance), naming
    the run that would separate them instead of pretending to know; with three or more such
@@ -167,9 +167,35 @@ def _fit(objective: GapObjective, problem: Problem, selected: list, nuisance: Op
     return params, nuisance, ev
 
 
-def _gap_in(objective: GapObjective, ev: Evaluation, scatter: Evaluation) -> float:
-    """Gap of ``ev``'s twins to the real records in the scatter of ``scatter``'s twins."""
-    return diag_gap.multi_gap(objective.reals, ev.stats, [s.std for s in scatter.stats])
+def _yardstick(scatters: Sequence[Evaluation], k: Optional[int] = None) -> List[Obs]:
+    """
+    Per record, the widest scatter of the ``scatters``' twins per element (without twin ``k``).
+
+    Later greedy steps are judged in the baseline's scatter widened wherever the current model
+    is more variable (a random walk at long τ), never narrowed: a model that only reshapes the
+    noise (a smoothing filter) keeps the baseline's yardstick and its better-known scatter.
+    """
+    def std(s):
+        return s.std if k is None else diag_gap.sim_stats(s.repeats[:k] + s.repeats[k + 1:]).std
+    out = []
+    for per_record in zip(*(e.stats for e in scatters)):
+        stds = [std(s) for s in per_record]
+        out.append({b: np.max([d[b] for d in stds], axis=0) for b in stds[0]})
+    return out
+
+
+def _gap_in(objective: GapObjective, ev: Evaluation, scatters: Sequence[Evaluation]) -> float:
+    """Gap of ``ev``'s twins to the real records in the ``scatters``' widest yardstick."""
+    return diag_gap.multi_gap(objective.reals, ev.stats, _yardstick(scatters))
+
+
+def _null_in(model: Evaluation, scatters: Sequence[Evaluation]) -> np.ndarray:
+    """Leave-one-out gaps of ``model``'s twins against its others, in ``_yardstick``."""
+    k_max = min(len(s.repeats) for s in model.stats)
+    return np.array([diag_gap.multi_gap(
+        [s.repeats[k] for s in model.stats],
+        [diag_gap.sim_stats(s.repeats[:k] + s.repeats[k + 1:]) for s in model.stats],
+        _yardstick(scatters, k)) for k in range(k_max)])
 
 
 def _look_alikes(names: Sequence[str]) -> bool:
@@ -179,16 +205,16 @@ def _look_alikes(names: Sequence[str]) -> bool:
 
 
 def _could_trail(objective: GapObjective, truth: Evaluation, other: Evaluation,
-                 scatter: Evaluation) -> float:
+                 scatters: Sequence[Evaluation]) -> float:
     """
     Return how far the true model can trail ``other`` on a record drawn from it (its largest).
 
     Each twin k of ``truth`` plays the real record: its gap to ``truth``'s other twins, and to
-    ``other``'s twins without twin k (same random numbers), both in ``scatter``'s yardstick
-    without twin k. A candidate whose gap exceeds the best one's by less than this could be
-    the true effect all the same: two noise processes that both add variance (flicker and a
-    rate random walk on a short record) trade places from one record to the next by far more
-    than the baseline's null spread, a tone and a random walk do not.
+    ``other``'s twins without twin k (same random numbers), both in the ``scatters``'
+    yardstick without twin k. A candidate whose gap exceeds the best one's by less than this
+    could be the true effect all the same: two noise processes that both add variance
+    trade places from one record to the next by far more than the baseline's null spread, a
+    tone and a random walk do not.
     """
     k_max = min(len(s.repeats) for s in truth.stats)
     trail = []
@@ -197,7 +223,7 @@ def _could_trail(objective: GapObjective, truth: Evaluation, other: Evaluation,
 
         def without(ev, k=k):
             return [diag_gap.sim_stats(s.repeats[:k] + s.repeats[k + 1:]) for s in ev.stats]
-        refs = [o.std for o in without(scatter)]
+        refs = _yardstick(scatters, k)
         trail.append(diag_gap.multi_gap(reals, without(truth), refs)
                      - diag_gap.multi_gap(reals, without(other), refs))
     return float(np.max(trail))
@@ -278,15 +304,17 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
     evaluations = {'baseline': base}
     shrink_needed, explained = base_needed, base_explained
     for step in range(max_steps):
-        # Each step is judged as the first one is: in the scatter of the current model's own
-        # twins, against what those twins score against each other. (In the baseline's scatter
-        # a model that adds variance - a random walk - hides a later, sharper effect such as
-        # a tone behind its own spread.) Never below the baseline's levels: a 95th percentile
-        # of a few repeats is noisy.
-        null_now = diag_gap.null_gaps(current.stats)
+        # Each step is judged as the first one is, against what the current model's twins
+        # score against each other, in the baseline's scatter widened where the current model
+        # is more variable (``_yardstick``): in the baseline's scatter alone, a model that
+        # adds variance - a random walk - hides a later, sharper effect such as a tone behind
+        # its own spread. Never below the baseline's levels: a 95th percentile of a few
+        # repeats is noisy.
+        scatters = [base, current]
+        null_now = _null_in(current, scatters)
         explained = max(base_explained, float(np.quantile(null_now, 0.95)))
         shrink_needed = max(base_needed, 2.0 * float(np.std(null_now, ddof=1)))
-        gap_now = _gap_in(objective, current, current)
+        gap_now = _gap_in(objective, current, scatters)
         if gap_now <= explained:
             break  # within what the current model scores against itself
         if step > 0:
@@ -298,7 +326,7 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                                         near=first[space.name][0])
         if not fits:
             break
-        judged = {n: _gap_in(objective, f[2], current) for n, f in fits.items()}
+        judged = {n: _gap_in(objective, f[2], scatters) for n, f in fits.items()}
         order = sorted(fits, key=lambda n: judged[n])
         best = order[0]
         params, best_nuisance, ev = fits[best]
@@ -309,7 +337,7 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                   if gap_now - judged[n] > shrink_needed
                   and (judged[n] - judged[best] <= shrink_needed
                        or judged[n] - judged[best] <= _could_trail(
-                           objective, fits[n][2], ev, current))]
+                           objective, fits[n][2], ev, scatters))]
         if rivals:
             # Look-alikes (known pairs, see SEPARATING_RUNS): keep the best, say which run
             # would separate them. Unrelated effects shrinking the gap equally: none of them

@@ -250,25 +250,35 @@ class AngleQuantization(Effect):
                'error is uniform and white when the per-sample angle increments spread over at '
                'least ~step/2 (rate noise N sqrt(dt) >= step / 2; otherwise it is correlated '
                'and the -1 slope is not formed), so the rate gets the IEEE quantization term '
-               'Q = step / sqrt(12).')
+               'Q = step / sqrt(12). dither = 1: a fresh uniform dither of one step is added '
+               'to the angle before each read-out, C_k = [theta_k / step + u_k] (body-dithered '
+               'ring-laser gyros, dithered counters): the angle error is then zero-mean and '
+               'white whatever the rate noise, of mean variance step^2 / 6, so Q = step / '
+               'sqrt(6).')
     PARAMS = {'step_rad': (1.0e-5, 'rad', 'angle quantum'),
-              'axis': _axis_param()}
+              'axis': _axis_param(),
+              'dither': (0.0, '-', '1: one-step uniform dither before each read-out')}
 
     def check(self):
         _rows(self)
         if self.step_rad <= 0:
             raise InputError('quantization: step_rad must be > 0')
+        if self.dither not in (0.0, 1.0):
+            raise InputError('quantization: dither must be 0 or 1')
 
     def output(self, ctx, gyro, accel):
         gyro = gyro.copy()
+        rng = self.rng(ctx) if self.dither else None
         for r in _rows(self):
-            theta = np.cumsum(gyro[r]) * ctx.dt
-            counts = np.floor(theta / self.step_rad)
-            gyro[r] = np.diff(counts, prepend=0.0) * (self.step_rad / ctx.dt)
+            theta = np.cumsum(gyro[r]) * ctx.dt / self.step_rad
+            if rng is not None:
+                theta += rng.uniform(0.0, 1.0, theta.size)
+            gyro[r] = np.diff(np.floor(theta), prepend=0.0) * (self.step_rad / ctx.dt)
         return gyro, accel
 
     def update_truth(self, ctx, truth):
-        _add_truth_term(truth, _rows(self), 'Q', self.step_rad / np.sqrt(12.0))
+        q = self.step_rad / np.sqrt(6.0 if self.dither else 12.0)
+        _add_truth_term(truth, _rows(self), 'Q', q)
 
 
 @register

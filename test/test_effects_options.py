@@ -1,11 +1,20 @@
-# gauss_markov order 2 (two first-order stages in cascade): stationary variance and correlation
-# against the closed forms; order 1 unchanged by the new option.
+# Optional catalogue shapes against closed forms: gauss_markov order 2 (two first-order stages
+# in cascade), quantization with dither (white angle error); the defaults are unchanged.
 from gyro_char import bench_sim
 from gyro_char.effects import EFFECTS
 from gyro_char.effects_sensor import second_order_gm
 from gyro_char.recordings import InputError
+from gyro_char.sim_config import BenchConfig
 import numpy as np
 import pytest
+
+DT = 0.01
+
+
+def _quiet_config(n_arw: float = 1e-9) -> BenchConfig:
+    return BenchConfig.from_preset('adis16405', {
+        'noise': {'gyro_x': {'N': n_arw, 'B': 0.0, 'K': 0.0, 'Q': 0.0, 'R': 0.0}},
+        'gyro': {'static_rate_hz': 1 / DT, 'output_step': 0.0}})
 
 
 def test_second_order_gm_is_stationary_from_the_first_sample():
@@ -22,12 +31,8 @@ def test_second_order_gm_is_stationary_from_the_first_sample():
 
 
 def test_order_two_record_has_sigma_and_the_cascade_correlation():
-    sigma, tc, dt = 0.02, 0.2, 0.01
-    cfg_noise = {'noise': {'gyro_x': {'N': 1e-9, 'B': 0.0, 'K': 0.0, 'Q': 0.0, 'R': 0.0}}}
-    from gyro_char.sim_config import BenchConfig
-    cfg = BenchConfig.from_preset('adis16405', {**cfg_noise, 'gyro': {
-        'static_rate_hz': 1 / dt, 'output_step': 0.0}})
-    x = bench_sim.simulate_static(cfg, duration=600.0, seed=4, channels=('gyro_x',), effects=[
+    sigma, tc, dt = 0.02, 0.2, DT
+    x = bench_sim.simulate_static(_quiet_config(), duration=600.0, seed=4, channels=('gyro_x',), effects=[
         {'name': 'gauss_markov', 'params': {'sigma': sigma, 'tau_s': tc, 'axis': 0.0,
                                             'order': 2.0}}]).imu.channels['gyro_x']
     y = x - x.mean()
@@ -48,3 +53,21 @@ def test_order_is_checked_and_defaults_to_the_first_order_process():
                                      effects=['gauss_markov:sigma=0.01,tau_s=0.5,axis=0,'
                                               'order=1'])
     assert np.array_equal(one.imu.channels['gyro_x'], same.imu.channels['gyro_x'])
+
+
+@pytest.mark.parametrize('dither,rms,lag1', [(0.0, np.sqrt(1 / 12), (0.3, 0.9)),
+                                             (1.0, np.sqrt(1 / 6), (-0.03, 0.03))])
+def test_dithered_angle_quantization_makes_the_angle_error_white(dither, rms, lag1):
+    # Per-sample angle increments 10x finer than the step: without dither the angle error is
+    # correlated from sample to sample; with it, white of variance step^2 / 6.
+    step, cfg = 1e-4, _quiet_config(1e-4)
+    runs = [bench_sim.simulate_static(cfg, duration=600.0, seed=4, channels=('gyro_x',),
+                                      effects=fx).imu.channels['gyro_x']
+            for fx in ([{'name': 'quantization', 'params': {
+                'step_rad': step, 'dither': dither, 'axis': 0.0}}], [])]
+    err = np.cumsum(runs[0] - runs[1]) * DT
+    err -= err.mean()
+    assert np.std(err) / step == pytest.approx(rms, rel=0.03)
+    assert lag1[0] < np.corrcoef(err[:-1], err[1:])[0, 1] < lag1[1]
+    with pytest.raises(InputError):
+        EFFECTS['quantization'](dither=0.5)
