@@ -32,9 +32,10 @@ def test_second_order_gm_is_stationary_from_the_first_sample():
 
 def test_order_two_record_has_sigma_and_the_cascade_correlation():
     sigma, tc, dt = 0.02, 0.2, DT
-    x = bench_sim.simulate_static(_quiet_config(), duration=600.0, seed=4, channels=('gyro_x',), effects=[
-        {'name': 'gauss_markov', 'params': {'sigma': sigma, 'tau_s': tc, 'axis': 0.0,
-                                            'order': 2.0}}]).imu.channels['gyro_x']
+    fx = [{'name': 'gauss_markov', 'params': {'sigma': sigma, 'tau_s': tc, 'axis': 0.0,
+                                              'order': 2.0}}]
+    x = bench_sim.simulate_static(_quiet_config(), duration=600.0, seed=4, channels=('gyro_x',),
+                                  effects=fx).imu.channels['gyro_x']
     y = x - x.mean()
     assert np.std(y) == pytest.approx(sigma, rel=0.1)
     a = np.exp(-dt / tc)
