@@ -1,14 +1,16 @@
 """Vectorised bag writing: bytes identical to rosbags' serializer, readable by rosbags."""
 from pathlib import Path
+import sqlite3
 
 from bag_factory import header_msg
-from gyro_char.ingest.bag_write import joint_state_encoder, typestore
+from gyro_char.ingest.bag_write import joint_state_encoder, merge_order, typestore
 from gyro_char.ingest.cdr import decode_imu, encode_imu, imu_size
-from gyro_char.recordings import InputError, Recording, write_bag
+from gyro_char.recordings import (InputError, read_encoder, read_imu, Recording, write_bag)
 from msg_adapters import fill_imu, imu_sample, joint_angle
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
+from rosbags.rosbag2 import Reader
 
 STORE = typestore()
 T = STORE.types
@@ -101,3 +103,74 @@ def test_write_refuses_bad_requests(tmp_path):
         write_bag(str(tmp_path / 'nan'), imu)
     with pytest.raises(InputError, match='no encoder samples'):
         write_bag(str(tmp_path / 'e'), _imu(10), Recording(np.empty(0), {'encoder': []}))
+
+
+def _log_order(path, storage):
+    """(topic, log ns) of every message in the order the file holds them (no sorting)."""
+    if storage == 'sqlite3':
+        db = next(Path(path).glob('*.db3'))
+        with sqlite3.connect(str(db)) as con:
+            names = dict(con.execute('SELECT id, name FROM topics'))
+            return [(names[c], ns) for c, ns in
+                    con.execute('SELECT topic_id, timestamp FROM messages ORDER BY id')]
+    with Reader(next(Path(path).glob('*.mcap'))) as reader:  # rosbags' record-by-record scan
+        return [(c.topic, ns) for c, ns, _ in reader.storage.messages_scan(reader.connections)]
+
+
+def _swing_pair(n, seed=0):
+    imu = _imu(n, seed)
+    enc_t = imu.t[0] + np.arange(int(0.9 * n)) / 300.0 + 1e-4  # other rate, other phase
+    return imu, Recording(enc_t, {'encoder': np.sin(enc_t)})
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_topics_written_merged_in_stamp_order(tmp_path, storage):
+    imu, enc = _swing_pair(12000)  # ~4.5 MB: several chunks
+    write_bag(str(tmp_path / 'b'), imu, enc, storage=storage)
+    order = _log_order(tmp_path / 'b', storage)
+    ns = np.array([t for _, t in order])
+    assert len(order) == len(imu) + len(enc)
+    assert np.all(np.diff(ns) >= 0)  # the file itself is in stamp order, not only the index
+    topics = np.array([t == '/stand/joint_states' for t, _ in order])
+    assert np.array_equal(ns[~topics], np.round(imu.t * 1e9).astype(np.int64))
+    assert np.array_equal(ns[topics], np.round(enc.t * 1e9).astype(np.int64))
+    assert np.count_nonzero(np.diff(topics.astype(int))) > len(enc)  # interleaved throughout
+
+
+def test_merge_order_keeps_each_stream_order():
+    a = np.array([0, 10, 20, 5, 30])   # goes back once: merged by its running maximum
+    b = np.array([10, 15, 25, 40])
+    which = merge_order(a, b)
+    assert which.tolist() == [0, 0, 1, 1, 0, 0, 1, 0, 1]  # a first at equal stamps
+    merged = np.empty(which.size, dtype=int)
+    merged[which == 0], merged[which == 1] = a, b
+    assert merged.tolist() == [0, 10, 10, 15, 20, 5, 25, 30, 40]
+    assert merge_order(a, b[:0]).tolist() == [0] * 5
+
+
+def test_bag_cut_short_keeps_both_topics_up_to_the_cut(tmp_path):
+    # A killed writer or a truncated copy: the MCAP has no summary and ends inside a chunk.
+    imu, enc = _swing_pair(12000)
+    write_bag(str(tmp_path / 'b'), imu, enc)
+    data = next((tmp_path / 'b').glob('*.mcap')).read_bytes()
+    for frac in (0.5, 0.8):
+        cut = tmp_path / f'cut{frac}'
+        cut.mkdir()
+        (cut / 'metadata.yaml').write_bytes((tmp_path / 'b' / 'metadata.yaml').read_bytes())
+        (cut / 'b.mcap').write_bytes(data[:int(frac * len(data))])
+        got_imu, got_enc = read_imu(str(cut), quiet=True), read_encoder(str(cut), quiet=True)
+        for got, rec in ((got_imu, imu), (got_enc, enc)):
+            k = len(got)
+            assert 0.4 * frac * len(rec) < k < len(rec)  # up to the chunk cut through
+            assert np.array_equal(got.t, rec.t[:k].round(9))
+            assert any('cut short' in n for n in got.notes)
+        assert np.array_equal(got_enc.channels['encoder'], enc.channels['encoder'][:len(got_enc)])
+        assert abs(got_imu.t[-1] - got_enc.t[-1]) < 1.0  # both topics up to the same time
+    # cut inside the first chunk (which holds the channel records): a clear error
+    cut = tmp_path / 'early'
+    cut.mkdir()
+    (cut / 'metadata.yaml').write_bytes((tmp_path / 'b' / 'metadata.yaml').read_bytes())
+    (cut / 'b.mcap').write_bytes(data[:len(data) // 20])
+    for read in (read_imu, read_encoder):
+        with pytest.raises(InputError, match='cannot open bag'):
+            read(str(cut), quiet=True)
