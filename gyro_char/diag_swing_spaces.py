@@ -106,7 +106,7 @@ def line_start(reals: Sequence[dict], base: Sequence[dict]) -> Optional[float]:
         if peaks is None or len(peaks) == 0 or 'encoder_lines' not in r:
             continue
         ex = np.asarray(r['encoder_lines']) - np.asarray(b['encoder_lines'])
-        for k in range(ex.size):
+        for k in np.flatnonzero(np.isfinite(peaks)):
             rank = (ex[k] > LINE_EXCESS, r['encoder_lines'][k] if ex[k] > LINE_EXCESS else ex[k])
             if key is None or rank > key:
                 best, key = float(np.round(peaks[k])), rank

@@ -74,9 +74,11 @@ def clean():
 
 def test_catalogue_cyclic_error_peaks_at_its_line_count(clean):
     imu, enc, o0 = clean
-    fx = [{'name': 'encoder_cyclic_error', 'params': {'lines': 2048.0, 'a1': 3e-5, 'a2': 1e-5}}]
+    fx = [{'name': 'encoder_cyclic_error', 'params': {'lines': 1500.0, 'a1': 3e-5, 'a2': 1e-5}}]
     o = _obs(*_record(effects=fx))
-    for lines, a in ((2048, 3e-5), (4096, 1e-5)):
+    # Bands reaching above the angle Nyquist (pi / (0.44 rad/s x 1 ms) = 7100 lines) unscored.
+    assert np.all(o['encoder_lines'][-2:] == 0.0) and np.all(np.isnan(o.line_peaks[-2:]))
+    for lines, a in ((1500, 3e-5), (3000, 1e-5)):
         b = _band(lines)
         assert abs(o.line_peaks[b] - lines) < 1.0
         assert 10 ** o['encoder_lines'][b] == pytest.approx(a, rel=0.15)
@@ -141,7 +143,10 @@ def test_blind_harness_cyclic_error_found_with_its_line_count(clean):
     d = _diagnose(imu, _harness_cyclic(enc), 28)
     assert d.selected_effects[:1] == ['encoder_cyclic_error']
     assert d.steps[0]['params']['lines'] == pytest.approx(1000.0, rel=0.01)
-    assert d.final_gap < 0.6 * d.baseline_gap
+    # The harness's 3rd harmonic (3000 lines) is not in the catalogue's shape: part of the
+    # gap stays; the fitted first-harmonic amplitude is the truth's (5e-5 rad) within 2x.
+    assert 2.5e-5 < d.steps[0]['params']['a1'] < 1e-4
+    assert d.final_gap < 0.8 * d.baseline_gap
 
 
 def test_blind_harness_jitter_found(clean):
