@@ -21,7 +21,8 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
   16384. A sine-cosine interpolation error is periodic in the angle, 2π / L, whatever the
   rate: every pass over an angle adds coherently, while the gyro's and the encoder's noise
   do not. Bands reaching above the encoder's angle Nyquist π / (peak rate x encoder
-  interval) (7100 lines at 1 kHz on a 0.44 rad/s swing) read 0 (log10 of 1: not measured). The peak's line count per band is kept unscored (``SwingObs.line_peaks``) for
+  interval) (7100 lines at 1 kHz on a 0.44 rad/s swing) read 0 (log10 of 1: not measured).
+  The peak's line count per band is kept unscored (``SwingObs.line_peaks``) for
   ``diag_swing_spaces.signs``;
 - ``rate_locked``: the residual's increment variance in bins of |cos θ| (i.e. of the swing
   rate) minus that of the slowest bin, per unit of rate² (``rate_locked``). An encoder stamp
