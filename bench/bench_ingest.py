@@ -1,17 +1,26 @@
 """
 Ingest speed: the vectorised raw-CDR reader against plain rosbags, in the same run.
 
-Writes a bag of N sensor_msgs/Imu messages (default 3.6 M: 3 h at 333 Hz) with
-``gyro_char.recordings.write_bag`` into a temporary directory (never the repository), for sqlite3
-and mcap storage, then measures messages/s of
+Writes bags into a temporary directory (never the repository) and measures messages/s of
 
 - the fast path (``read_imu_bag``: stamps + 6 channels, not yet sanitised), whole bag;
-- rosbags per-message (``AnyReader.messages`` + ``deserialize`` + ``msg_adapters.imu_sample``),
-  timed on the first ``--subset`` messages and extrapolated (stated in the output);
+- rosbags per-message (``AnyReader.messages`` on the Imu topic + ``deserialize`` +
+  ``msg_adapters.imu_sample``), timed on the first ``--subset`` Imu messages and extrapolated
+  (stated in the output);
 
 checks that both give the same stamps and values bit for bit on that subset, and prints the ratio
 of wall-clock rates and of CPU-time rates (the box is shared: CPU time is the steadier figure).
-Usage: ``python bench/bench_ingest.py [--n 3600000] [--subset 300000] [--keep DIR]``.
+Cases:
+
+- ``imu``: N sensor_msgs/Imu messages (default 3.6 M: 3 h at 333 Hz) written with
+  ``gyro_char.recordings.write_bag``, sqlite3 and mcap: one record size per MCAP chunk;
+- ``mixed``: N/4 Imu + N/4 JointState merged by stamp (``write_bag`` with an encoder), mcap:
+  every chunk mixes two record sizes, as ``ros2 bag record`` logs several topics;
+- ``three``: N/12 Imu + N/12 JointState + N/120 std_msgs/String of varying length, written
+  message by message by rosbags' own MCAP writer (its chunk layout and message index).
+
+Usage: ``python bench/bench_ingest.py [--n 3600000] [--subset 300000] [--cases imu,mixed,three]
+[--keep DIR]``.
 """
 import argparse
 from itertools import islice
@@ -22,12 +31,17 @@ import tempfile
 import time
 
 from gyro_char.ingest.bag_read import read_imu_bag
+from gyro_char.ingest.bag_write import IMU_TYPE, JOINT_TYPE, joint_state_encoder, stamps_ns
 from gyro_char.ingest.bag_write import typestore
+from gyro_char.ingest.cdr import encode_imu
 from gyro_char.ingest.sanitize import sanitize
-from gyro_char.recordings import IMU_CHANNELS, Recording, write_bag
+from gyro_char.recordings import ENCODER_CHANNEL, IMU_CHANNELS, Recording, write_bag
 from msg_adapters import imu_sample
 import numpy as np
 from rosbags.highlevel import AnyReader
+from rosbags.rosbag2 import StoragePlugin, Writer
+
+IMU_TOPIC = '/imu/data_raw'
 
 
 def make_recording(n: int, rate: float = 333.0, seed: int = 1) -> Recording:
@@ -39,12 +53,43 @@ def make_recording(n: int, rate: float = 333.0, seed: int = 1) -> Recording:
     return Recording(t, ch)
 
 
+def make_encoder(n: int, rate: float = 333.0, seed: int = 2) -> Recording:
+    rng = np.random.default_rng(seed)
+    t = 1.7e9 + np.arange(n) / rate + rng.uniform(0, 2e-5, n)
+    return Recording(t, {ENCODER_CHANNEL: np.sin(np.arange(n) / 200.0)})
+
+
+def write_three(path: Path, n: int) -> None:
+    """Imu + JointState + std_msgs/String (1/10 the rate, 0..99 chars), rosbags' writer."""
+    store = typestore()
+    imu, enc = make_recording(n), make_encoder(n)
+    imu_raw = encode_imu(imu.t, [imu.channels[k] for k in IMU_CHANNELS[:3]],
+                         [imu.channels[k] for k in IMU_CHANNELS[3:]], frame_id='imu_link')
+    enc_raw = joint_state_encoder(store, 'stand_joint')(enc.t, enc.channels[ENCODER_CHANNEL])
+    t_str = 1.7e9 + np.arange(n // 10) / 33.3 + 1e-4
+    text = store.types['std_msgs/msg/String']
+    strs = [bytes(store.serialize_cdr(text(data='x' * (k % 100)), 'std_msgs/msg/String'))
+            for k in range(t_str.size)]
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        conns = [writer.add_connection(name, kind, typestore=store) for name, kind in
+                 ((IMU_TOPIC, IMU_TYPE), ('/stand/joint_states', JOINT_TYPE),
+                  ('/diagnostics_text', 'std_msgs/msg/String'))]
+        stamps = [stamps_ns(imu.t), stamps_ns(enc.t), stamps_ns(t_str)]
+        rows = [imu_raw, enc_raw, strs]
+        topic = np.concatenate([np.full(s.size, k) for k, s in enumerate(stamps)])
+        order = np.argsort(np.concatenate(stamps), kind='stable')
+        index = np.concatenate([np.arange(s.size) for s in stamps])
+        for k, i in zip(topic[order].tolist(), index[order].tolist()):
+            writer.write(conns[k], int(stamps[k][i]), bytes(rows[k][i]))
+
+
 def rosbags_per_message(path: Path, count: int):
-    """Return (wall s, CPU s, stamps, 6 x values) for the first ``count`` messages via rosbags."""
+    """Return (wall s, CPU s, stamps, 6 x values) for the first ``count`` Imu messages."""
     start, cpu = time.perf_counter(), time.process_time()
     ts, rows = [], []
     with AnyReader([path], default_typestore=typestore()) as reader:
-        for conn, _, raw in islice(reader.messages(), count):
+        conns = [c for c in reader.connections if c.topic == IMU_TOPIC]
+        for conn, _, raw in islice(reader.messages(connections=conns), count):
             stamp, six = imu_sample(reader.deserialize(raw, conn.msgtype))
             ts.append(stamp)
             rows.append(six)
@@ -52,37 +97,50 @@ def rosbags_per_message(path: Path, count: int):
             np.array(rows))
 
 
-def bench(n: int, subset: int, workdir: Path) -> bool:
-    rec = make_recording(n)
+def measure(label: str, path: Path, n: int, subset: int, t_write: float) -> bool:
+    """Time both readers on the Imu topic of ``path`` (``n`` messages); print one line."""
+    size = sum(f.stat().st_size for f in path.iterdir())
+    t0, c0 = time.perf_counter(), time.process_time()
+    fast = read_imu_bag(path, topic=IMU_TOPIC, quiet=True)
+    t_fast, c_fast = time.perf_counter() - t0, time.process_time() - c0
+    t0 = time.perf_counter()
+    sanitize(fast)
+    t_san = time.perf_counter() - t0
+    m = min(subset, n)
+    t_slow, c_slow, ts, rows = rosbags_per_message(path, m)
+    same = (np.array_equal(ts.view(np.int64), fast.t[:m].view(np.int64)) and all(
+        np.array_equal(rows[:, i].view(np.int64), fast.channels[k][:m].view(np.int64))
+        for i, k in enumerate(IMU_CHANNELS)))
+    fast_rate, slow_rate = n / t_fast, m / t_slow
+    print(f'[{label}] write {t_write:.2f} s ({size / 1e6:.0f} MB) | fast read {t_fast:.2f} s '
+          f'= {fast_rate / 1e6:.2f} M Imu msg/s (+ sanitize {t_san:.2f} s) | rosbags '
+          f'per-message {slow_rate / 1e6:.3f} M msg/s (timed on the first {m} Imu messages, '
+          f'extrapolated to {n / slow_rate:.1f} s for all) | speed-up '
+          f'{fast_rate / slow_rate:.1f}x wall, {(n / c_fast) / (m / c_slow):.1f}x CPU time '
+          f'({c_fast:.2f} s CPU for all vs {c_slow:.2f} s for {m}) | bit-for-bit equal on '
+          f'those {m}: {same}')
+    return same and len(fast) == n
+
+
+def bench(n: int, subset: int, workdir: Path, cases) -> bool:
     ok = True
-    print(f'{n} sensor_msgs/Imu messages, bags in {workdir}')
-    for storage in ('sqlite3', 'mcap'):
-        path = workdir / f'bag_{storage}'
+    print(f'N = {n}, bags in {workdir}')
+    jobs = []
+    if 'imu' in cases:
+        rec = make_recording(n)
+        jobs += [(f'imu {s}', n, lambda p, s=s: write_bag(str(p), rec, storage=s))
+                 for s in ('sqlite3', 'mcap')]
+    if 'mixed' in cases:
+        jobs.append(('mixed imu+joint_states mcap', n // 4, lambda p: write_bag(
+            str(p), make_recording(n // 4), make_encoder(n // 4), storage='mcap')))
+    if 'three' in cases:
+        jobs.append(('three topics, rosbags writer, mcap', n // 12,
+                     lambda p: write_three(p, n // 12)))
+    for k, (label, count, write) in enumerate(jobs):
+        path = workdir / f'bag_{k}'
         t0 = time.perf_counter()
-        write_bag(str(path), rec, storage=storage)
-        t_write = time.perf_counter() - t0
-        size = sum(f.stat().st_size for f in path.iterdir())
-        t0, c0 = time.perf_counter(), time.process_time()
-        fast = read_imu_bag(path, quiet=True)
-        t_fast, c_fast = time.perf_counter() - t0, time.process_time() - c0
-        t0 = time.perf_counter()
-        sanitize(fast)
-        t_san = time.perf_counter() - t0
-        m = min(subset, n)
-        t_slow, c_slow, ts, rows = rosbags_per_message(path, m)
-        same = (np.array_equal(ts.view(np.int64), fast.t[:m].view(np.int64)) and all(
-            np.array_equal(rows[:, i].view(np.int64), fast.channels[k][:m].view(np.int64))
-            for i, k in enumerate(IMU_CHANNELS)))
-        ok &= same and len(fast) == n
-        fast_rate, slow_rate = n / t_fast, m / t_slow
-        print(f'[{storage}] write {t_write:.2f} s ({size / 1e6:.0f} MB) | fast read '
-              f'{t_fast:.2f} s = {fast_rate / 1e6:.2f} M msg/s (+ sanitize {t_san:.2f} s) | '
-              f'rosbags '
-              f'per-message {slow_rate / 1e6:.3f} M msg/s (timed on the first {m} messages, '
-              f'extrapolated to {n / slow_rate:.1f} s for all) | speed-up '
-              f'{fast_rate / slow_rate:.1f}x wall, {(n / c_fast) / (m / c_slow):.1f}x CPU time '
-              f'({c_fast:.2f} s CPU for all vs {c_slow:.2f} s for {m}) | bit-for-bit equal on '
-              f'those {m}: {same}')
+        write(path)
+        ok &= measure(label, path, count, subset, time.perf_counter() - t0)
         shutil.rmtree(path)
     return ok
 
@@ -90,16 +148,19 @@ def bench(n: int, subset: int, workdir: Path) -> bool:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--n', type=int, default=3_600_000,
-                        help='messages (default 3 h x 333 Hz)')
+                        help='messages (default 3 h x 333 Hz); see the cases for each size')
     parser.add_argument('--subset', type=int, default=300_000,
                         help='messages timed through rosbags per-message deserialization')
+    parser.add_argument('--cases', default='imu,mixed,three',
+                        help='comma-separated: imu, mixed, three')
     parser.add_argument('--keep', default=None, help='work in this directory (not deleted)')
     args = parser.parse_args(argv)
+    cases = set(args.cases.split(','))
     if args.keep:
         Path(args.keep).mkdir(parents=True, exist_ok=True)
-        return 0 if bench(args.n, args.subset, Path(args.keep)) else 1
+        return 0 if bench(args.n, args.subset, Path(args.keep), cases) else 1
     with tempfile.TemporaryDirectory(prefix='bench_ingest_') as tmp:
-        return 0 if bench(args.n, args.subset, Path(tmp)) else 1
+        return 0 if bench(args.n, args.subset, Path(tmp), cases) else 1
 
 
 if __name__ == '__main__':
