@@ -31,8 +31,8 @@ import tempfile
 import time
 
 from gyro_char.ingest.bag_read import read_imu_bag
-from gyro_char.ingest.bag_write import IMU_TYPE, JOINT_TYPE, joint_state_encoder, stamps_ns
-from gyro_char.ingest.bag_write import typestore
+from gyro_char.ingest.bag_write import (IMU_TYPE, joint_state_encoder, JOINT_TYPE, stamps_ns,
+                                        typestore)
 from gyro_char.ingest.cdr import encode_imu
 from gyro_char.ingest.sanitize import sanitize
 from gyro_char.recordings import ENCODER_CHANNEL, IMU_CHANNELS, Recording, write_bag
