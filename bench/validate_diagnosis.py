@@ -172,6 +172,7 @@ def main(argv=None) -> int:
                      'baseline_gap': d.baseline_gap, 'final_gap': d.final_gap,
                      'null_mean': d.null_gap['mean'],
                      'baseline_excess': d.baseline_excess, 'final_excess': d.final_excess,
+                     'final_model_mean': d.null_gap['final_model_mean'],
                      'ambiguous': d.ambiguous})
         print(f'{label:40s} seed {seed} level {rows[-1]["level"]} gap '
               f'{d.baseline_gap:7.2f} -> {d.final_gap:6.2f} (null q95 '
@@ -218,6 +219,11 @@ def report(rows) -> None:
               f'{100.0 * float(np.median(shrink)):.0f} %; share of the excess over the '
               f'sim-vs-itself level removed {100.0 * float(np.median(excess)):.0f} %; '
               f'1 - final_excess/baseline_excess {100.0 * float(np.median(quad)):.0f} %')
+        low = [r for r, v in zip(hit, shrink) if v < 0.7]
+        floor = [r for r in low if r['final_gap'] <= r['final_model_mean']]
+        print(f'  cases below 70 %: {len(low)}/{len(hit)}, of which {len(floor)} end at or '
+              f'below the gap the final model\'s own twins score against each other (its '
+              f'floor: no fit of that model does better on average)')
     pairs = [r for r in rows if len(r['truth']) == 2]
     if pairs:
         both = [r for r in pairs if set(r['truth']) <= set(r['selected'])]
