@@ -222,7 +222,7 @@ def report(rows) -> None:
         low = [r for r, v in zip(hit, shrink) if v < 0.7]
         floor = [r for r in low if r['final_gap'] <= r['final_model_mean']]
         print(f'  cases below 70 %: {len(low)}/{len(hit)}, of which {len(floor)} end at or '
-              f'below the gap the final model\'s own twins score against each other (its '
+              f'below the gap the twins of the final model score against each other (its '
               f'floor: no fit of that model does better on average)')
     pairs = [r for r in rows if len(r['truth']) == 2]
     if pairs:
