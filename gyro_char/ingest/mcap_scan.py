@@ -1,11 +1,15 @@
 """
 Find the raw CDR payloads of one topic in an MCAP file without a Python loop per message.
 
-The file is memory-mapped and walked record by record (a few per megabyte: chunks); inside a
-chunk, the common case - only message records of one size - is recognised with strided numpy
-views and the payload offsets come out as an array. Chunks holding other records (schemas,
-channels, several topics of different sizes) are walked with ``struct`` (about a microsecond a
-record, still far below deserialising). Compression: none, zstd and lz4, as rosbags reads them.
+The file is memory-mapped and walked record by record (a few per megabyte: chunks). Inside a
+chunk, the message index records written after it (one per channel: log time and offset of each
+message) give where message records start, for every topic; without an index (a file cut short,
+a writer that omits it) a byte scan for message heads in the chunk's time range does. Either way
+the candidates are only a shortcut: the chunk is walked exactly, jumping over runs of candidates
+that chain end to start, and records that are not candidates (schemas, channels) are read one at
+a time, so a wrong or partial index costs speed, never messages. Mixed chunks (several topics of
+different record sizes, as recorders log them) thus cost a few numpy calls per chunk.
+Compression: none, zstd and lz4, as rosbags reads them.
 """
 import mmap
 import struct
@@ -14,15 +18,16 @@ import zlib
 
 from gyro_char.recordings import InputError
 import numpy as np
+from numpy.lib.stride_tricks import as_strided
 
 MAGIC = b'\x89MCAP0\r\n'
 OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_FOOTER, OP_DATA_END = 0x04, 0x05, 0x06, 0x02, 0x0F
+OP_MESSAGE_INDEX = 0x07
 MESSAGE_HEAD = 22  # channel id 2 + sequence 4 + log time 8 + publish time 8
+RECORD_MIN = 9 + MESSAGE_HEAD  # opcode + length + message head
+RESCAN_AFTER = 64  # records walked one by one in a chunk before its index is given up
 
 Block = Tuple[np.ndarray, np.ndarray, np.ndarray]  # (uint8 buffer, offsets, sizes)
-# the start of a message record: opcode, record length, channel id
-_HEAD = np.dtype({'names': ['op', 'len', 'cid'], 'formats': ['u1', '<u8', '<u2'],
-                  'offsets': [0, 1, 9], 'itemsize': 11})
 
 
 def _decompress(kind: str, payload: bytes, size: int) -> bytes:
@@ -40,6 +45,25 @@ def _decompress(kind: str, payload: bytes, size: int) -> bytes:
     if len(out) != size:
         raise InputError('corrupt MCAP chunk: wrong decompressed size')
     return out
+
+
+def _index_after(mm: mmap.mmap, pos: int) -> Optional[np.ndarray]:
+    """
+    Message offsets (in the chunk's records) of the message index records at ``pos``, or None.
+
+    They follow their chunk; any that is cut short or malformed ends the list.
+    """
+    parts = []
+    size = len(mm)
+    while pos + 15 <= size and mm[pos] == OP_MESSAGE_INDEX:
+        (length,) = struct.unpack_from('<Q', mm, pos + 1)
+        _cid, n_bytes = struct.unpack_from('<HI', mm, pos + 9)
+        if pos + 9 + length > size or 6 + n_bytes > length or n_bytes % 16:
+            break
+        # (log time, offset) pairs: every second uint64
+        parts.append(np.frombuffer(mm, '<u8', count=n_bytes // 8, offset=pos + 15)[1::2])
+        pos += 9 + length
+    return np.concatenate(parts) if parts else None
 
 
 class McapTopicScan:
@@ -102,7 +126,7 @@ class McapTopicScan:
                 if struct.unpack_from('<H', mm, start)[0] in self.wanted:
                     loose.append((start + MESSAGE_HEAD, length - MESSAGE_HEAD))
             elif op == OP_CHUNK:
-                block = self._chunk(mm, data, mv, start, end, pos)
+                block = self._chunk(mm, data, start, end, pos, _index_after(mm, end))
                 if block is not None:
                     yield block
             elif op in (OP_DATA_END, OP_FOOTER):
@@ -117,8 +141,8 @@ class McapTopicScan:
             offs, sizes = zip(*loose)
             yield data, np.array(offs, dtype=np.int64), np.array(sizes, dtype=np.int64)
 
-    def _chunk(self, mm, data, mv, start: int, end: int, pos: int):
-        _t0, _t1, usize, crc, clen = struct.unpack_from('<QQQII', mm, start)
+    def _chunk(self, mm, data, start: int, end: int, pos: int, index: Optional[np.ndarray]):
+        t0, t1, usize, crc, clen = struct.unpack_from('<QQQII', mm, start)
         kind = bytes(mm[start + 32:start + 32 + clen]).decode('ascii', 'replace')
         (rlen,) = struct.unpack_from('<Q', mm, start + 32 + clen)
         r0 = start + 40 + clen
@@ -134,29 +158,32 @@ class McapTopicScan:
         # a zero CRC means 'not computed' (rosbags writes none; ros2 bag record does)
         if crc and zlib.crc32(inner[base:base + usize]) != crc:
             raise InputError(f'{self.path}: corrupt MCAP chunk at byte {pos} (CRC mismatch)')
-        return self._records(inner, base, base + usize, pos)
+        return self._records(inner, base, base + usize, pos, index, (t0, t1))
 
-    def _records(self, buf: np.ndarray, lo: int, hi: int, pos: int):
-        n_bytes = hi - lo
-        if n_bytes >= 9 and buf[lo] == OP_MESSAGE:
-            length = int(buf[lo + 1:lo + 9].view('<u8')[0])
-            rec = 9 + length
-            if length >= MESSAGE_HEAD and n_bytes % rec == 0:
-                heads = np.ndarray(shape=(n_bytes // rec,), dtype=_HEAD, buffer=buf, offset=lo,
-                                   strides=(rec,))
-                if np.all(heads['op'] == OP_MESSAGE) and np.all(heads['len'] == length):
-                    cids = heads['cid']
-                    hit = (np.flatnonzero(cids == next(iter(self.wanted)))
-                           if len(self.wanted) == 1 else
-                           np.flatnonzero(np.isin(cids, list(self.wanted))))
-                    if hit.size == 0:
-                        return None
-                    offsets = lo + hit.astype(np.int64) * rec + 9 + MESSAGE_HEAD
-                    return buf, offsets, np.full(hit.size, length - MESSAGE_HEAD, np.int64)
+    def _records(self, buf: np.ndarray, lo: int, hi: int, pos: int,
+                 index: Optional[np.ndarray], times: Tuple[int, int]):
+        """
+        Walk the chunk's records ``buf[lo:hi]``; return the wanted payloads' block or None.
+
+        The walk is exact (every record from ``lo`` to ``hi``, as one by one) but jumps over
+        runs of *candidate* message records that chain end to start: from a true record start
+        a run can only lead to the next true starts. Candidates come from the chunk's message
+        index when there is one, else from a byte scan; records that are not candidates
+        (schemas, channels, unindexed messages) are walked one at a time.
+        """
+        cand = (_Candidates.indexed(buf, lo, hi, index) if index is not None
+                else _Candidates.scanned(buf, lo, hi, times))
+        runs, loose, late = [], [], {}
         mv = memoryview(buf)
-        offs, sizes = [], []
+        steps = 0
         p = lo
         while p < hi:
+            i = cand.at(p)
+            if i >= 0:
+                j = cand.run_end(i)
+                runs.append((cand.pos[i:j + 1], cand.length[i:j + 1]))
+                p = int(cand.succ[j])
+                continue
             if p + 9 > hi:
                 raise InputError(f'{self.path}: corrupt MCAP chunk at byte {pos}')
             op = buf[p]
@@ -166,14 +193,122 @@ class McapTopicScan:
                 raise InputError(f'{self.path}: corrupt MCAP chunk at byte {pos}')
             if op == OP_MESSAGE and length >= MESSAGE_HEAD:
                 if struct.unpack_from('<H', mv, s)[0] in self.wanted:
-                    offs.append(s + MESSAGE_HEAD)
-                    sizes.append(length - MESSAGE_HEAD)
+                    loose.append((s + MESSAGE_HEAD, length - MESSAGE_HEAD))
             elif op == OP_CHANNEL:
+                known = set(self.wanted)
                 self._channel(mv, s)
+                late.update((cid, p) for cid in self.wanted - known)
             p = e
+            steps += 1
+            if steps == RESCAN_AFTER and index is not None:  # an index missing many messages
+                cand = _Candidates.scanned(buf, p, hi, times)
+        return self._selected(buf, runs, loose, late)
+
+    def _selected(self, buf: np.ndarray, runs, loose, late):
+        """Wanted payloads of the walked runs (channel known before the record) and loose."""
+        offs, sizes = [], []
+        if runs and self.wanted:
+            at = np.concatenate([r[0] for r in runs]) if len(runs) > 1 else runs[0][0]
+            length = np.concatenate([r[1] for r in runs]) if len(runs) > 1 else runs[0][1]
+            cids = buf[at + 9].astype(np.uint16) | (buf[at + 10].astype(np.uint16) << 8)
+            hit = (cids == next(iter(self.wanted)) if len(self.wanted) == 1
+                   else np.isin(cids, list(self.wanted)))
+            for cid, p in late.items():  # a message before its channel record is not read
+                hit &= ~((cids == cid) & (at < p))
+            offs.append(at[hit] + 9 + MESSAGE_HEAD)
+            sizes.append(length[hit].astype(np.int64) - MESSAGE_HEAD)
+        if loose:
+            offs.append(np.array([o for o, _ in loose], dtype=np.int64))
+            sizes.append(np.array([n for _, n in loose], dtype=np.int64))
         if not offs:
             return None
-        return buf, np.array(offs, dtype=np.int64), np.array(sizes, dtype=np.int64)
+        offsets, sizes = np.concatenate(offs), np.concatenate(sizes)
+        if offsets.size == 0:
+            return None
+        if loose and runs:  # file order
+            order = np.argsort(offsets, kind='stable')
+            offsets, sizes = offsets[order], sizes[order]
+        return _packed(buf, offsets, sizes)
+
+
+def _packed(buf: np.ndarray, offsets: np.ndarray, sizes: np.ndarray) -> Block:
+    """
+    Copy equal-size payloads lying at uneven strides (other topics between) into one array.
+
+    The decoders read a block at a constant stride with one record view; scattered payloads
+    would each be gathered field by field (several times slower than this one copy).
+    """
+    size = int(sizes[0])
+    if (offsets.size < 2 or size == 0 or np.any(sizes != size)
+            or np.all(np.diff(offsets) == offsets[1] - offsets[0])):
+        return buf, offsets, sizes
+    rows = as_strided(buf, shape=(buf.size - size + 1, size), strides=(buf.strides[0], 1))
+    return (rows[offsets].reshape(-1), np.arange(offsets.size, dtype=np.int64) * size,
+            sizes)
+
+
+def _u64(buf: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Little-endian uint64 at byte positions ``at`` (each at most ``buf.size - 8``)."""
+    if at.size == 0:
+        return np.zeros(0, dtype='<u8')
+    win = as_strided(buf, shape=(buf.size - 7, 8), strides=(buf.strides[0], 1))
+    return win[at].view('<u8').reshape(-1)
+
+
+class _Candidates:
+    """
+    Sorted positions that may start a message record, each with its length and its end.
+
+    Every candidate is a message record head (opcode, length >= 22) whose record fits before
+    the chunk's end; ``run_end`` says how far candidates chain (one's end is the next start).
+    """
+
+    def __init__(self, buf: np.ndarray, at: np.ndarray, hi: int) -> None:
+        ok = buf[at] == OP_MESSAGE
+        at = at[ok]
+        length = _u64(buf, at + 1)
+        ok = (length >= MESSAGE_HEAD) & (length <= (hi - 9 - at).astype(np.uint64))
+        self.pos = at[ok]
+        self.length = length[ok]
+        self.succ = self.pos + 9 + self.length.astype(np.int64)
+        self._list = None
+        # the last candidate of the run each candidate is in
+        breaks = np.flatnonzero(self.succ[:-1] != self.pos[1:])
+        self._breaks = np.append(breaks, self.pos.size - 1)
+
+    @classmethod
+    def indexed(cls, buf: np.ndarray, lo: int, hi: int, index: np.ndarray) -> '_Candidates':
+        """From message index offsets (relative to the chunk's records, any order)."""
+        if hi - lo < RECORD_MIN:
+            index = index[:0]
+        index = index[index <= np.uint64(max(hi - lo - RECORD_MIN, 0))]
+        at = lo + index.astype(np.int64)
+        if at.size > 1 and np.any(at[1:] <= at[:-1]):  # several channels: merge, drop repeats
+            at = np.sort(at)
+            at = at[np.append(True, at[1:] != at[:-1])]
+        return cls(buf, at, hi)
+
+    @classmethod
+    def scanned(cls, buf: np.ndarray, lo: int, hi: int, times: Tuple[int, int]) -> '_Candidates':
+        """
+        Every message opcode byte whose log time lies in the chunk's time range.
+
+        The time test makes a false candidate (an opcode byte inside a payload) unlikely;
+        one only ends a run early, never changes what the walk finds.
+        """
+        at = np.flatnonzero(buf[lo:max(hi - RECORD_MIN + 1, lo)] == OP_MESSAGE) + lo
+        log = _u64(buf, at + 15)
+        at = at[(log >= np.uint64(times[0])) & (log <= np.uint64(times[1]))]
+        return cls(buf, at, hi)
+
+    def at(self, p: int) -> int:
+        """Index of the candidate at byte ``p``, or -1."""
+        i = int(np.searchsorted(self.pos, p))
+        return i if i < self.pos.size and self.pos[i] == p else -1
+
+    def run_end(self, i: int) -> int:
+        """Index of the last candidate chained to candidate ``i``."""
+        return int(self._breaks[np.searchsorted(self._breaks, i)])
 
 
 def list_channels(path: str) -> Dict[str, str]:
