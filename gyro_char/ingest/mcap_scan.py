@@ -28,6 +28,9 @@ RECORD_MIN = 9 + MESSAGE_HEAD  # opcode + length + message head
 RESCAN_AFTER = 64  # records walked one by one in a chunk before its index is given up
 
 Block = Tuple[np.ndarray, np.ndarray, np.ndarray]  # (uint8 buffer, offsets, sizes)
+# the start of a message record: opcode, record length, channel id
+_HEAD = np.dtype({'names': ['op', 'len', 'cid'], 'formats': ['u1', '<u8', '<u2'],
+                  'offsets': [0, 1, 9], 'itemsize': 11})
 
 
 def _decompress(kind: str, payload: bytes, size: int) -> bytes:
@@ -165,12 +168,26 @@ class McapTopicScan:
         """
         Walk the chunk's records ``buf[lo:hi]``; return the wanted payloads' block or None.
 
-        The walk is exact (every record from ``lo`` to ``hi``, as one by one) but jumps over
-        runs of *candidate* message records that chain end to start: from a true record start
-        a run can only lead to the next true starts. Candidates come from the chunk's message
-        index when there is one, else from a byte scan; records that are not candidates
-        (schemas, channels, unindexed messages) are walked one at a time.
+        A chunk of message records of one size only (one topic) is read as a strided view.
+        Otherwise the walk is exact (every record from ``lo`` to ``hi``, as one by one) but
+        jumps over runs of *candidate* message records that chain end to start: from a true
+        record start a run can only lead to the next true starts. Candidates come from the
+        chunk's message index when there is one, else from a byte scan; records that are not
+        candidates (schemas, channels, unindexed messages) are walked one at a time.
         """
+        n_bytes = hi - lo
+        if n_bytes >= 9 and buf[lo] == OP_MESSAGE:  # one topic, one size: a strided view
+            length = int(buf[lo + 1:lo + 9].view('<u8')[0])
+            rec = 9 + length
+            if length >= MESSAGE_HEAD and n_bytes % rec == 0:
+                heads = np.ndarray(shape=(n_bytes // rec,), dtype=_HEAD, buffer=buf, offset=lo,
+                                   strides=(rec,))
+                if np.all(heads['op'] == OP_MESSAGE) and np.all(heads['len'] == length):
+                    hit = np.flatnonzero(np.isin(heads['cid'], list(self.wanted)))
+                    if hit.size == 0:
+                        return None
+                    offsets = lo + hit.astype(np.int64) * rec + 9 + MESSAGE_HEAD
+                    return buf, offsets, np.full(hit.size, length - MESSAGE_HEAD, np.int64)
         cand = (_Candidates.indexed(buf, lo, hi, index) if index is not None
                 else _Candidates.scanned(buf, lo, hi, times))
         runs, loose, late = [], [], {}
