@@ -16,16 +16,20 @@ Cases:
   ``gyro_char.recordings.write_bag``, sqlite3 and mcap: one record size per MCAP chunk;
 - ``mixed``: N/4 Imu + N/4 JointState merged by stamp (``write_bag`` with an encoder), mcap:
   every chunk mixes two record sizes, as ``ros2 bag record`` logs several topics;
+- ``noindex``: the ``mixed`` bag with its message index records made private records (as from
+  a writer that omits them): the reader's byte-scan fallback;
 - ``three``: N/12 Imu + N/12 JointState + N/120 std_msgs/String of varying length, written
   message by message by rosbags' own MCAP writer (its chunk layout and message index).
 
-Usage: ``python bench/bench_ingest.py [--n 3600000] [--subset 300000] [--cases imu,mixed,three]
-[--keep DIR]``.
+Usage: ``python bench/bench_ingest.py [--n 3600000] [--subset 300000]
+[--cases imu,mixed,noindex,three] [--keep DIR]``.
 """
 import argparse
 from itertools import islice
+import mmap
 from pathlib import Path
 import shutil
+import struct
 import sys
 import tempfile
 import time
@@ -83,6 +87,26 @@ def write_three(path: Path, n: int) -> None:
             writer.write(conns[k], int(stamps[k][i]), bytes(rows[k][i]))
 
 
+def write_mixed(path: Path, n: int, hide_index: bool = False) -> None:
+    """Imu + JointState merged by stamp (``write_bag``), optionally without message index."""
+    write_bag(str(path), make_recording(n), make_encoder(n), storage='mcap')
+    if hide_index and hide_message_index(path) == 0:
+        raise RuntimeError(f'{path}: no message index records to hide')
+
+
+def hide_message_index(path: Path) -> int:
+    """Turn the message index records (0x07) of the bag's MCAP into private records (0x80)."""
+    hidden = 0
+    with open(next(path.glob('*.mcap')), 'r+b') as fh, mmap.mmap(fh.fileno(), 0) as mm:
+        pos = 8
+        while pos + 9 <= len(mm) and mm[pos] != 0x0F:  # up to the data end record
+            if mm[pos] == 0x07:
+                mm[pos] = 0x80
+                hidden += 1
+            pos += 9 + struct.unpack_from('<Q', mm, pos + 1)[0]
+    return hidden
+
+
 def rosbags_per_message(path: Path, count: int):
     """Return (wall s, CPU s, stamps, 6 x values) for the first ``count`` Imu messages."""
     start, cpu = time.perf_counter(), time.process_time()
@@ -131,8 +155,10 @@ def bench(n: int, subset: int, workdir: Path, cases) -> bool:
         jobs += [(f'imu {s}', n, lambda p, s=s: write_bag(str(p), rec, storage=s))
                  for s in ('sqlite3', 'mcap')]
     if 'mixed' in cases:
-        jobs.append(('mixed imu+joint_states mcap', n // 4, lambda p: write_bag(
-            str(p), make_recording(n // 4), make_encoder(n // 4), storage='mcap')))
+        jobs.append(('mixed imu+joint_states mcap', n // 4, lambda p: write_mixed(p, n // 4)))
+    if 'noindex' in cases:
+        jobs.append(('mixed, message index hidden: scan', n // 4,
+                     lambda p: write_mixed(p, n // 4, hide_index=True)))
     if 'three' in cases:
         jobs.append(('three topics, rosbags writer, mcap', n // 12,
                      lambda p: write_three(p, n // 12)))
@@ -151,8 +177,8 @@ def main(argv=None) -> int:
                         help='messages (default 3 h x 333 Hz); see the cases for each size')
     parser.add_argument('--subset', type=int, default=300_000,
                         help='messages timed through rosbags per-message deserialization')
-    parser.add_argument('--cases', default='imu,mixed,three',
-                        help='comma-separated: imu, mixed, three')
+    parser.add_argument('--cases', default='imu,mixed,noindex,three',
+                        help='comma-separated: imu, mixed, noindex, three')
     parser.add_argument('--keep', default=None, help='work in this directory (not deleted)')
     args = parser.parse_args(argv)
     cases = set(args.cases.split(','))

@@ -288,7 +288,6 @@ class _Candidates:
         self.pos = at[ok]
         self.length = length[ok]
         self.succ = self.pos + 9 + self.length.astype(np.int64)
-        self._list = None
         # the last candidate of the run each candidate is in
         breaks = np.flatnonzero(self.succ[:-1] != self.pos[1:])
         self._breaks = np.append(breaks, self.pos.size - 1)
