@@ -10,6 +10,8 @@ Writes bags into a temporary directory (never the repository) and measures messa
 
 checks that both give the same stamps and values bit for bit on that subset, and prints the ratio
 of wall-clock rates and of CPU-time rates (the box is shared: CPU time is the steadier figure).
+In the ``mixed`` and ``three`` cases the encoder topic is measured the same way
+(``read_encoder_bag`` against rosbags + ``msg_adapters.joint_angle``).
 Cases:
 
 - ``imu``: N sensor_msgs/Imu messages (default 3.6 M: 3 h at 333 Hz) written with
@@ -38,14 +40,16 @@ from gyro_char.ingest.bag_read import read_imu_bag
 from gyro_char.ingest.bag_write import (IMU_TYPE, joint_state_encoder, JOINT_TYPE, stamps_ns,
                                         typestore)
 from gyro_char.ingest.cdr import encode_imu
+from gyro_char.ingest.encoder_read import read_encoder_bag
 from gyro_char.ingest.sanitize import sanitize
 from gyro_char.recordings import ENCODER_CHANNEL, IMU_CHANNELS, Recording, write_bag
-from msg_adapters import imu_sample
+from msg_adapters import imu_sample, joint_angle
 import numpy as np
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import StoragePlugin, Writer
 
 IMU_TOPIC = '/imu/data_raw'
+ENCODER_TOPIC = '/stand/joint_states'
 
 
 def make_recording(n: int, rate: float = 333.0, seed: int = 1) -> Recording:
@@ -76,7 +80,7 @@ def write_three(path: Path, n: int) -> None:
             for k in range(t_str.size)]
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
         conns = [writer.add_connection(name, kind, typestore=store) for name, kind in
-                 ((IMU_TOPIC, IMU_TYPE), ('/stand/joint_states', JOINT_TYPE),
+                 ((IMU_TOPIC, IMU_TYPE), (ENCODER_TOPIC, JOINT_TYPE),
                   ('/diagnostics_text', 'std_msgs/msg/String'))]
         stamps = [stamps_ns(imu.t), stamps_ns(enc.t), stamps_ns(t_str)]
         rows = [imu_raw, enc_raw, strs]
@@ -107,38 +111,61 @@ def hide_message_index(path: Path) -> int:
     return hidden
 
 
-def rosbags_per_message(path: Path, count: int):
-    """Return (wall s, CPU s, stamps, 6 x values) for the first ``count`` Imu messages."""
+def _imu_fast(path: Path):
+    rec = read_imu_bag(path, topic=IMU_TOPIC, quiet=True)
+    return rec, [rec.channels[k] for k in IMU_CHANNELS]
+
+
+def _encoder_fast(path: Path):
+    rec = read_encoder_bag(path, topic=ENCODER_TOPIC, quiet=True)
+    return rec, [rec.channels[ENCODER_CHANNEL]]
+
+
+# what -> (topic, message name, fast reader, per-message adapter: msg -> (stamp, [values]))
+READERS = {
+    'imu': (IMU_TOPIC, 'Imu', _imu_fast, imu_sample),
+    'encoder': (ENCODER_TOPIC, 'JointState', _encoder_fast,
+                lambda msg: (lambda s_v: (s_v[0], [s_v[1]]))(joint_angle(msg, 0))),
+}
+
+
+def rosbags_per_message(path: Path, count: int, what: str):
+    """Return (wall s, CPU s, stamps, values) for the first ``count`` messages of ``what``."""
+    topic, _, _, sample = READERS[what]
     start, cpu = time.perf_counter(), time.process_time()
     ts, rows = [], []
     with AnyReader([path], default_typestore=typestore()) as reader:
-        conns = [c for c in reader.connections if c.topic == IMU_TOPIC]
+        conns = [c for c in reader.connections if c.topic == topic]
         for conn, _, raw in islice(reader.messages(connections=conns), count):
-            stamp, six = imu_sample(reader.deserialize(raw, conn.msgtype))
+            stamp, values = sample(reader.deserialize(raw, conn.msgtype))
             ts.append(stamp)
-            rows.append(six)
+            rows.append(values)
     return (time.perf_counter() - start, time.process_time() - cpu, np.array(ts),
             np.array(rows))
 
 
-def measure(label: str, path: Path, n: int, subset: int, t_write: float) -> bool:
-    """Time both readers on the Imu topic of ``path`` (``n`` messages); print one line."""
+def measure(label: str, path: Path, n: int, subset: int, t_write: float,
+            what: str = 'imu') -> bool:
+    """Time both readers on one topic of ``path`` (``n`` messages); print one line."""
+    _, name, fast_read, _ = READERS[what]
     size = sum(f.stat().st_size for f in path.iterdir())
     t0, c0 = time.perf_counter(), time.process_time()
-    fast = read_imu_bag(path, topic=IMU_TOPIC, quiet=True)
+    fast, columns = fast_read(path)
     t_fast, c_fast = time.perf_counter() - t0, time.process_time() - c0
-    t0 = time.perf_counter()
-    sanitize(fast)
-    t_san = time.perf_counter() - t0
+    extra = ''
+    if what == 'imu':
+        t0 = time.perf_counter()
+        sanitize(fast)
+        extra = f' (+ sanitize {time.perf_counter() - t0:.2f} s)'
     m = min(subset, n)
-    t_slow, c_slow, ts, rows = rosbags_per_message(path, m)
+    t_slow, c_slow, ts, rows = rosbags_per_message(path, m, what)
     same = (np.array_equal(ts.view(np.int64), fast.t[:m].view(np.int64)) and all(
-        np.array_equal(rows[:, i].view(np.int64), fast.channels[k][:m].view(np.int64))
-        for i, k in enumerate(IMU_CHANNELS)))
+        np.array_equal(rows[:, i].view(np.int64), col[:m].view(np.int64))
+        for i, col in enumerate(columns)))
     fast_rate, slow_rate = n / t_fast, m / t_slow
     print(f'[{label}] write {t_write:.2f} s ({size / 1e6:.0f} MB) | fast read {t_fast:.2f} s '
-          f'= {fast_rate / 1e6:.2f} M Imu msg/s (+ sanitize {t_san:.2f} s) | rosbags '
-          f'per-message {slow_rate / 1e6:.3f} M msg/s (timed on the first {m} Imu messages, '
+          f'= {fast_rate / 1e6:.2f} M {name} msg/s{extra} | rosbags per-message '
+          f'{slow_rate / 1e6:.3f} M msg/s (timed on the first {m} {name} messages, '
           f'extrapolated to {n / slow_rate:.1f} s for all) | speed-up '
           f'{fast_rate / slow_rate:.1f}x wall, {(n / c_fast) / (m / c_slow):.1f}x CPU time '
           f'({c_fast:.2f} s CPU for all vs {c_slow:.2f} s for {m}) | bit-for-bit equal on '
@@ -152,21 +179,25 @@ def bench(n: int, subset: int, workdir: Path, cases) -> bool:
     jobs = []
     if 'imu' in cases:
         rec = make_recording(n)
-        jobs += [(f'imu {s}', n, lambda p, s=s: write_bag(str(p), rec, storage=s))
+        jobs += [(f'imu {s}', n, lambda p, s=s: write_bag(str(p), rec, storage=s), ('imu',))
                  for s in ('sqlite3', 'mcap')]
     if 'mixed' in cases:
-        jobs.append(('mixed imu+joint_states mcap', n // 4, lambda p: write_mixed(p, n // 4)))
+        jobs.append(('mixed imu+joint_states mcap', n // 4, lambda p: write_mixed(p, n // 4),
+                     ('imu', 'encoder')))
     if 'noindex' in cases:
         jobs.append(('mixed, message index hidden: scan', n // 4,
-                     lambda p: write_mixed(p, n // 4, hide_index=True)))
+                     lambda p: write_mixed(p, n // 4, hide_index=True), ('imu',)))
     if 'three' in cases:
         jobs.append(('three topics, rosbags writer, mcap', n // 12,
-                     lambda p: write_three(p, n // 12)))
-    for k, (label, count, write) in enumerate(jobs):
+                     lambda p: write_three(p, n // 12), ('imu', 'encoder')))
+    for k, (label, count, write, whats) in enumerate(jobs):
         path = workdir / f'bag_{k}'
         t0 = time.perf_counter()
         write(path)
-        ok &= measure(label, path, count, subset, time.perf_counter() - t0)
+        t_write = time.perf_counter() - t0
+        for what in whats:
+            ok &= measure(label if what == 'imu' else f'{label}, encoder', path, count, subset,
+                          t_write, what)
         shutil.rmtree(path)
     return ok
 

@@ -10,4 +10,4 @@ import bench_ingest  # noqa: E402,I100 - the bench directory is not a package
 def test_bench_ingest_small(tmp_path, capsys):
     assert bench_ingest.main(['--n', '12000', '--subset', '1000', '--keep', str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    assert out.count('bit-for-bit equal on those 1000: True') == 5
+    assert out.count('bit-for-bit equal on those 1000: True') == 7
