@@ -154,6 +154,52 @@ def calibrate_n(base: SwingBaseline, real: dict, ranges: dict,
     return replace(base, N=base.N * float(np.sqrt(_white(real) / np.mean(sims))))
 
 
+TURNING_COS = 0.05  # |cos θ| below this: within ~3° of phase of a turning point
+
+
+def turning_noise(encoder: Recording, period_s: float) -> float:
+    """
+    Return the encoder's white angle noise at the swing's turning points (rad).
+
+    The mean square of the increments of the encoder's residual from its sine + trend fit,
+    halved, over consecutive samples where the swing rate is under 5 % of its peak. Whatever
+    scales with the rate (a stamp error reads as rate x error) vanishes there; white angle
+    noise (ADC, quantization, the stand's amplitude noise) does not.
+    """
+    t = encoder.t - encoder.t[0]
+    e = encoder.channels[ENCODER_CHANNEL]
+    w = 2.0 * np.pi / period_s
+    ts = t / max(t[-1], 1e-9)
+    a = np.array([np.sin(w * t), np.cos(w * t), np.ones_like(t), ts, ts * ts])
+    coef = np.linalg.solve(np.einsum('ik,jk->ij', a, a), np.einsum('ik,k->i', a, e))
+    r = e - coef @ a
+    slow = np.abs(np.cos(w * t + np.arctan2(coef[1], coef[0]))) < TURNING_COS
+    pair = slow[1:] & slow[:-1]
+    d = np.diff(r)[pair]
+    return float(np.sqrt(np.mean(d * d) / 2.0)) if d.size >= 16 else float('nan')
+
+
+def calibrate_encoder(base: SwingBaseline, encoder: Recording,
+                      seeds: Sequence[int] = (901, 902, 903)) -> SwingBaseline:
+    """
+    Re-pin the twin's encoder white noise on the record's turning points.
+
+    The filter's encoder noise lumps in everything white in the encoder residual over the
+    whole swing: an encoder stamp jitter (rate x error, 6 to 36 times the ADC noise in the
+    validation's jitter cases) would otherwise be built into the baseline twin, and a jitter
+    candidate could only add more. The twins' turning-point noise (``turning_noise``) is
+    matched to the record's by moving the ADC noise (variances add).
+    """
+    real = turning_noise(encoder, base.period_s)
+    if not np.isfinite(real):
+        return base
+    sims = [turning_noise(simulate_twin(base, [], s)[1], base.period_s) for s in seeds]
+    adc = encoder_white_sigma(base, twin_config(base))
+    other = base.encoder_sigma ** 2 - adc ** 2
+    adc2 = max(adc ** 2 + real ** 2 - float(np.mean(np.square(sims))), 0.0)
+    return replace(base, encoder_sigma=float(np.sqrt(adc2 + max(other, 0.0))))
+
+
 def pooled_scale_factor(bases: Sequence[SwingBaseline]) -> Tuple[float, float]:
     """Inverse-variance mean of the records' Kalman scale-factor errors, and its sigma."""
     sf = np.array([b.record_scale_factor_error for b in bases])
@@ -242,7 +288,8 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     ranges = [layout(len(imu), b.dt, b.period_s) for (imu, _, _), b in zip(records, bases)]
     reals = [_obs(imu, enc, b, r) for (imu, enc, _), b, r in zip(records, bases, ranges)]
     if fitted:
-        bases = [calibrate_n(b, real, r) for b, real, r in zip(bases, reals, ranges)]
+        bases = [calibrate_n(calibrate_encoder(b, enc), real, r)
+                 for b, (_, enc, _), real, r in zip(bases, records, reals, ranges)]
     # The rate dependence of the scale factor: each further record's scale against the first's.
     scales = [record_scale(imu, enc, b.axis) for (imu, enc, _), b in zip(records, bases)]
     for i in range(1, len(records)):
