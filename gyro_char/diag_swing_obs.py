@@ -24,16 +24,17 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
   interval) (7100 lines at 1 kHz on a 0.44 rad/s swing) read 0 (log10 of 1: not measured).
   The peak's line count per band is kept unscored (``SwingObs.line_peaks``) for
   ``diag_swing_spaces.signs``;
-- ``rate_locked``: the residual's increment variance in bins of |cos θ| (i.e. of the swing
-  rate) minus that of the slowest bin, per unit of rate² (``rate_locked``). An encoder stamp
-  error δ reads as an angle error rate · δ, a noise whose variance grows as the rate squared;
-  the gyro's white noise, the quantizations and the encoder's white noise do not depend on
-  the swing phase;
+- ``rate_locked``: the (high-passed) residual's increment variance in bins of |cos θ| (i.e.
+  of the swing rate) minus that of the slowest bin, per unit of rate² (``rate_locked``). An
+  encoder stamp error δ reads as an angle error rate · δ, a noise whose variance grows as the
+  rate squared; the gyro's white noise, the quantizations and the encoder's white noise do
+  not depend on the swing phase;
 - ``increment_acf``: normalised autocorrelation at lags 1..4 of the GYRO-stamp residual's
-  increments. This is the residual's whiteness, not the swing filter's innovations
-  (``swing_batch`` folds rows into a square-root information factor and never forms them);
-  for the gyro stream the two differ by the fitted deterministic part only. Colouring of the
-  gyro noise (a sensor FIR such as a fractional group delay, smoothing) shows here.
+  increments (high-passed like the encoder-stamp one). This is the residual's whiteness, not
+  the swing filter's innovations (``swing_batch`` folds rows into a square-root information
+  factor and never forms them); for the gyro stream the two differ by the fitted
+  deterministic part only. Colouring of the gyro noise (a sensor FIR such as a fractional
+  group delay, smoothing) shows here.
 
 Whole-record components rather than per-window ones: a constant effect's z grows with the
 record length instead of being spread over windows; the twins' repeats give the scatter.
@@ -49,10 +50,11 @@ PSD_BINS = 10
 LINE_EDGES = np.geomspace(64.0, 16384.0, 9)
 # Angle bins of the line spectrum: Nyquist 1.25 x the top band edge.
 ANGLE_BIN = np.pi / (1.25 * LINE_EDGES[-1])
-# Residual high-pass before the line spectrum (samples of a centred moving mean): the gyro
-# angle's random walk is slow in time and would leak into every line count at the turning
-# points, where the angle stands still.
-HP_SAMPLES = 201
+# Residual high-pass (span of a centred moving mean, s) before the line spectrum, the rate
+# bins and the whiteness: the gyro angle's random walk is slow in time and would leak into
+# every line count at the turning points, where the angle stands still; an effect's swing
+# harmonics would dominate the increments.
+HP_SECONDS = 0.2
 # |cos θ| bin edges of ``rate_locked`` (the first bin is the reference).
 RATE_EDGES = (0.0, 0.3, 0.6, 0.85, 1.0001)
 STAMP_UNIT = 1e-6  # s, scale of ``rate_locked``
@@ -105,7 +107,7 @@ UNITS = {'in_phase': 'Hz', 'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f
          'increment_acf': 's'}
 
 
-def highpass(x: np.ndarray, n: int = HP_SAMPLES) -> np.ndarray:
+def highpass(x: np.ndarray, n: int) -> np.ndarray:
     """``x`` minus its centred moving mean over ``n`` samples (shorter at the ends)."""
     c = np.concatenate(([0.0], np.cumsum(x)))
     i = np.arange(x.size)
@@ -217,7 +219,10 @@ def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: n
     tau_e, phi = t_e[me] - lo, enc[me]
     tse = tau_e / span
     r_e = np.interp(tau_e, tau, ang) - k[0] * phi - (k[1] + k[2] * tse + k[3] * tse * tse)
-    peaks, where = band_peaks(*line_spectrum(phi, highpass(r_e)))
+    # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
+    # large, deterministic, and the harmonic blocks' business - must not pass for noise here.
+    hp_e = highpass(r_e, int(round(HP_SECONDS / max(float(np.median(np.diff(tau_e))), 1e-9))))
+    peaks, where = band_peaks(*line_spectrum(phi, hp_e))
     # Bands reaching above the encoder's angle Nyquist at the peak swing rate hold aliases of
     # the gyro/encoder stamp pattern, which twins at rates differing by ppm do not share (z
     # of 3 on clean records): a constant, so that they score nothing.
@@ -230,8 +235,8 @@ def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: n
                     'harmonic_3f': h[4:6],
                     'residual_psd': np.log10(np.maximum(psd, 1e-300)),
                     'encoder_lines': np.log10(np.maximum(peaks, 1e-300)),
-                    'rate_locked': rate_locked(th_e, np.diff(r_e), peak_rate),
-                    'increment_acf': increment_acf(r)})
+                    'rate_locked': rate_locked(th_e, np.diff(hp_e), peak_rate),
+                    'increment_acf': increment_acf(highpass(r, int(round(HP_SECONDS / dt))))})
     out.line_peaks = where
     d = np.diff(r_e)[np.abs(np.cos(th_e)) < RATE_EDGES[1]]
     out.slow_ms = float(np.mean(d * d)) if d.size else float('nan')
