@@ -13,7 +13,7 @@ Compression: none, zstd and lz4, as rosbags reads them.
 """
 import mmap
 import struct
-from typing import Dict, Iterator, Optional, Set, Tuple
+from typing import Callable, Dict, Iterator, Optional, Set, Tuple
 import zlib
 
 from gyro_char.recordings import InputError
@@ -129,7 +129,7 @@ class McapTopicScan:
                 if struct.unpack_from('<H', mm, start)[0] in self.wanted:
                     loose.append((start + MESSAGE_HEAD, length - MESSAGE_HEAD))
             elif op == OP_CHUNK:
-                block = self._chunk(mm, data, start, end, pos, _index_after(mm, end))
+                block = self._chunk(mm, data, start, end, pos)
                 if block is not None:
                     yield block
             elif op in (OP_DATA_END, OP_FOOTER):
@@ -144,7 +144,7 @@ class McapTopicScan:
             offs, sizes = zip(*loose)
             yield data, np.array(offs, dtype=np.int64), np.array(sizes, dtype=np.int64)
 
-    def _chunk(self, mm, data, start: int, end: int, pos: int, index: Optional[np.ndarray]):
+    def _chunk(self, mm, data, start: int, end: int, pos: int):
         t0, t1, usize, crc, clen = struct.unpack_from('<QQQII', mm, start)
         kind = bytes(mm[start + 32:start + 32 + clen]).decode('ascii', 'replace')
         (rlen,) = struct.unpack_from('<Q', mm, start + 32 + clen)
@@ -161,10 +161,11 @@ class McapTopicScan:
         # a zero CRC means 'not computed' (rosbags writes none; ros2 bag record does)
         if crc and zlib.crc32(inner[base:base + usize]) != crc:
             raise InputError(f'{self.path}: corrupt MCAP chunk at byte {pos} (CRC mismatch)')
-        return self._records(inner, base, base + usize, pos, index, (t0, t1))
+        return self._records(inner, base, base + usize, pos, lambda: _index_after(mm, end),
+                             (t0, t1))
 
     def _records(self, buf: np.ndarray, lo: int, hi: int, pos: int,
-                 index: Optional[np.ndarray], times: Tuple[int, int]):
+                 read_index: Callable[[], Optional[np.ndarray]], times: Tuple[int, int]):
         """
         Walk the chunk's records ``buf[lo:hi]``; return the wanted payloads' block or None.
 
@@ -183,11 +184,15 @@ class McapTopicScan:
                 heads = np.ndarray(shape=(n_bytes // rec,), dtype=_HEAD, buffer=buf, offset=lo,
                                    strides=(rec,))
                 if np.all(heads['op'] == OP_MESSAGE) and np.all(heads['len'] == length):
-                    hit = np.flatnonzero(np.isin(heads['cid'], list(self.wanted)))
+                    cids = heads['cid']
+                    hit = (np.flatnonzero(cids == next(iter(self.wanted)))
+                           if len(self.wanted) == 1 else
+                           np.flatnonzero(np.isin(cids, list(self.wanted))))
                     if hit.size == 0:
                         return None
                     offsets = lo + hit.astype(np.int64) * rec + 9 + MESSAGE_HEAD
                     return buf, offsets, np.full(hit.size, length - MESSAGE_HEAD, np.int64)
+        index = read_index()  # (after the chunk: only read when needed)
         cand = (_Candidates.indexed(buf, lo, hi, index) if index is not None
                 else _Candidates.scanned(buf, lo, hi, times))
         runs, loose, late = [], [], {}
@@ -300,7 +305,7 @@ class _Candidates:
         index = index[index <= np.uint64(max(hi - lo - RECORD_MIN, 0))]
         at = lo + index.astype(np.int64)
         if at.size > 1 and np.any(at[1:] <= at[:-1]):  # several channels: merge, drop repeats
-            at = np.sort(at)
+            at = np.sort(at, kind='stable')  # a merge of the sorted per-channel runs
             at = at[np.append(True, at[1:] != at[:-1])]
         return cls(buf, at, hi)
 
