@@ -63,16 +63,9 @@ TWO_PI = 2.0 * np.pi
 
 
 class SwingObs(dict):
-    """
-    Observable blocks of one record, plus unscored side information.
-
-    ``line_peaks``: line count of each ``encoder_lines`` band's peak; ``slow_ms``: mean square
-    of the encoder-stamp residual's increments where the swing is slowest (|cos θ| < 0.3),
-    the encoder's white noise with little of any rate-borne error (``encoder_sigma_from``).
-    """
+    """Observable blocks of one record, plus the unscored ``line_peaks`` (see module doc)."""
 
     line_peaks: np.ndarray = np.array([])
-    slow_ms: float = float('nan')
 
 
 def _solve(cols: List[np.ndarray], y: np.ndarray) -> np.ndarray:
@@ -238,23 +231,4 @@ def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: n
                     'rate_locked': rate_locked(th_e, np.diff(hp_e), peak_rate),
                     'increment_acf': increment_acf(highpass(r, int(round(HP_SECONDS / dt))))})
     out.line_peaks = where
-    d = np.diff(r_e)[np.abs(np.cos(th_e)) < RATE_EDGES[1]]
-    out.slow_ms = float(np.mean(d * d)) if d.size else float('nan')
     return out
-
-
-def encoder_sigma_from(sigma: float, real: dict, twin: dict) -> float:
-    """
-    Return the encoder white noise (rad) that gives a twin the record's slow-swing increments.
-
-    The swing filter's encoder noise lumps every encoder error in; a cyclic error or stamp
-    jitter inflates it (8x for 5e-5 rad of cyclic error on a 3e-6 rad encoder), and the
-    twins then bury the structure the line and rate blocks look for under white noise. Where
-    the swing is slowest both are small, so the excess of the record's ``slow_ms`` over a
-    baseline twin's (simulated with ``sigma``) is white encoder variance: each increment
-    carries it twice. Floored at 5 % of ``sigma``.
-    """
-    r, t = getattr(real, 'slow_ms', np.nan), getattr(twin, 'slow_ms', np.nan)
-    if not (np.isfinite(r) and np.isfinite(t)):
-        return float(sigma)
-    return float(np.sqrt(max(sigma * sigma + 0.5 * (r - t), (0.05 * sigma) ** 2)))

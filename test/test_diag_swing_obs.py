@@ -117,21 +117,6 @@ def test_rate_locked_reads_encoder_stamp_jitter(clean):
     assert np.all(np.abs(apparent / (3e-4 / np.sqrt(3)) - 1.0) < 0.2), apparent
 
 
-def test_encoder_sigma_from_removes_encoder_errors(clean):
-    imu, enc, o0 = clean
-    rec = (imu, _harness_cyclic(enc))
-    base = diag_swing.fit_baseline(*rec, PERIOD)
-    real = _obs(*rec)
-    sigma = base.encoder_sigma
-    assert sigma > 5 * 5e-6  # the filter lumps the cyclic error into the white noise
-    for s in (901, 902):
-        imu_t, enc_t = diag_swing.simulate_twin(base, [], s)
-        sigma = diag_swing_obs.encoder_sigma_from(sigma, real, _obs(imu_t, enc_t))
-        base.encoder_sigma = sigma
-    clean_sigma = diag_swing.fit_baseline(imu, enc, PERIOD).encoder_sigma
-    assert sigma < 1.5 * clean_sigma
-
-
 def _diagnose(imu, enc, seed):
     # Every candidate is fitted (blind); one greedy step: the first selection is under test.
     return diagnose.run(diag_swing.swing_problem(imu, enc, PERIOD), repeats=4, seed=seed,
