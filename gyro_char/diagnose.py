@@ -18,9 +18,8 @@ twins of those records under a list of effects, and the candidate effects' searc
    (or within the spread of the candidates' own gaps, for effects that add variance), naming
    the run that would separate them instead of pretending to know; with three or more such
    candidates that are not all known look-alikes, none is selected and the search stops;
-6. refits the selected effects jointly (coordinate passes, each with the others fixed; one
-   pass after every step, up to three at the end) and reports the final gap after that
-   (``refined``).
+6. refits the selected effects jointly (coordinate passes, each with the others fixed) and
+   reports the final gap after that (``refined``).
 """
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence
@@ -354,12 +353,7 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                 break
         selected.append((best, params))
         nuisance = best_nuisance
-        # Settle the selected effects together before looking for another one: a parameter
-        # searched once, while its partner still sat at a grid value (a correlation time
-        # against its sigma), leaves a residual that any further effect would "explain".
-        selected, nuisance, ev = _backfit(objective, problem, selected, nuisance, ev, passes=1)
-        steps.append({'effect': best, 'params': _jsonable(selected[-1][1]),
-                      'gap_after': ev.gap})
+        steps.append({'effect': best, 'params': _jsonable(params), 'gap_after': ev.gap})
         current = ev
     greedy_gap = current.gap
     if selected:
