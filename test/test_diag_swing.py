@@ -125,3 +125,18 @@ def test_pooled_scale_factor_is_the_inverse_variance_mean():
     sf, sig = diag_swing.pooled_scale_factor([b, b1])
     assert sf == pytest.approx(b.record_scale_factor_error + 3e-4 / 5, rel=1e-9)
     assert sig == pytest.approx(b.record_scale_factor_sigma / np.sqrt(1.25), rel=1e-9)
+
+
+def test_twin_encoder_noise_is_pinned_where_stamp_jitter_vanishes():
+    # Encoder stamps off by 150 us rms: the filter's encoder noise lumps in rate x error,
+    # ~15x the 3 urad ADC noise; at the turning points it is gone, and the twin gets the ADC
+    # level back (within the turning-point estimate's reach of the other white terms).
+    imu, enc = _record([('timestamp_jitter', {'sigma_s': 1.5e-4, 'stream': 2.0})], 48)
+    base = diag_swing.fit_baseline(imu, enc, 5.0)
+    lumped = diag_swing.twin_config(base).encoder.adc_noise
+    pinned = diag_swing.twin_config(diag_swing.calibrate_encoder(base, enc)).encoder.adc_noise
+    assert lumped > 10 * 3e-6
+    assert pinned < 5e-6
+    clean_imu, clean_enc = _record([], 48)
+    assert diag_swing.turning_noise(enc, 5.0) == pytest.approx(
+        diag_swing.turning_noise(clean_enc, 5.0), rel=0.15)
