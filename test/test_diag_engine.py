@@ -44,7 +44,7 @@ def test_look_alike_effects_are_reported_as_ambiguous_with_a_separating_run():
     assert abs(d.steps[0]['params']['k'] - 2.0) < 0.2
     amb = d.ambiguous[0]
     assert set(amb['effects']) == {'time_delay', 'g_sensitivity'}
-    assert 'second period or amplitude' in amb['separating_run']
+    assert 'second swing period' in amb['separating_run']
     assert d.where[0]['observable'] == 'a'
     js = d.to_json()
     assert js['ambiguous'] and js['gap_metric']
