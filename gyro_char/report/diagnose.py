@@ -22,8 +22,13 @@ TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
           'quadrature': 'swing residual: cos θ component (rad)',
           'harmonic_2f': 'swing residual 2θ: sin (0), cos (1) (rad)',
           'harmonic_3f': 'swing residual 3θ: sin (0), cos (1) (rad)',
-          'residual_psd': 'residual rate PSD (log10 (rad/s)²/Hz) vs f (Hz)'}
-LOG_X = {'adev', 'psd', 'drift', 'residual_psd'}
+          'residual_psd': 'residual rate PSD (log10 (rad/s)²/Hz) vs f (Hz)',
+          'encoder_lines': 'encoder residual vs angle: peak (log10 rad) vs lines/rev',
+          'rate_locked': 'rate-locked stamp variance (asinh σ²/µs²) vs |cos θ|',
+          'increment_acf': 'residual increments: autocorrelation vs lag (s)',
+          'scale_factor_shift': "scale factor minus run 1's vs peak rate (rad/s)"}
+LOG_X = {'adev', 'psd', 'drift', 'residual_psd', 'encoder_lines'}
+COLUMNS = 3
 
 
 def _x(block: str, ranges: np.ndarray) -> np.ndarray:
@@ -32,7 +37,7 @@ def _x(block: str, ranges: np.ndarray) -> np.ndarray:
         return np.sqrt(lo * hi)
     if block.startswith('harmonic') or block in ('in_phase', 'quadrature'):
         return np.arange(lo.size, dtype=float)
-    if block == 'drift':
+    if block in ('drift', 'scale_factor_shift'):
         return hi
     return 0.5 * (lo + hi)
 
@@ -48,10 +53,14 @@ def _band(ax, x, repeats: List[Dict[str, np.ndarray]], block: str, color: str, l
     ax.plot(x, mid, '-', color=color, lw=1.2, label=label)
 
 
-def plot_diagnosis(diag, ranges: Dict[str, np.ndarray], path: str, title: str = '') -> None:
-    """Render one channel's ``diagnose.Diagnosis`` (first record) to ``path``."""
+def plot_diagnosis(diag, ranges: Dict[str, np.ndarray], path: str,
+                   title: str = '') -> List[str]:
+    """Render one channel's ``diagnose.Diagnosis`` (first record) to ``path``; panel titles."""
     blocks = list(diag.reals[0].keys())
-    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5), constrained_layout=True)
+    # A panel per block plus the gap chart, however many blocks the kind has.
+    rows = -(-(len(blocks) + 1) // COLUMNS)
+    fig, axes = plt.subplots(rows, COLUMNS, figsize=(15, 4.25 * rows), constrained_layout=True,
+                             squeeze=False)
     axes = axes.ravel()
     base = diag.evaluations['baseline'].stats[0]
     final = diag.evaluations['final'].stats[0]
@@ -67,7 +76,7 @@ def plot_diagnosis(diag, ranges: Dict[str, np.ndarray], path: str, title: str = 
         ax.set_title(TITLES.get(block, block), fontsize=9)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
-    ax = axes[len(blocks)] if len(blocks) < axes.size else axes[-1]
+    ax = axes[len(blocks)]
     names = ['baseline'] + [r['effect'] for r in diag.ranking] + ['selected']
     gaps = [diag.baseline_gap] + [r['gap_after'] for r in diag.ranking] + [diag.final_gap]
     colors = ['C0'] + ['C1'] * len(diag.ranking) + ['C2']
@@ -85,4 +94,6 @@ def plot_diagnosis(diag, ranges: Dict[str, np.ndarray], path: str, title: str = 
     if title:
         fig.suptitle(title)
     fig.savefig(path, dpi=90)
+    drawn = [a.get_title() for a in axes if a.get_visible()]
     plt.close(fig)
+    return drawn
