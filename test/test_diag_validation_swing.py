@@ -1,0 +1,68 @@
+# The swing validation harness (bench/validate_diagnosis_swing.py): its effect shapes are what
+# it says they are, and its report counts top-1, ambiguity and false alarms as documented.
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _harness():
+    spec = importlib.util.spec_from_file_location(
+        'validate_diagnosis_swing', ROOT / 'bench' / 'validate_diagnosis_swing.py')
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize('samples', [0.23, 0.61])
+def test_lagrange_delay_is_the_stated_fraction_of_a_sample(samples):
+    h = _harness()
+    dt, f = 1.0 / h.RATE_HZ, 1.0 / h.PERIOD
+    t = np.arange(int(60.0 * h.RATE_HZ)) * dt
+    x = np.cos(2 * np.pi * f * t)
+    _, y = h.lagrange_delay(t, x, None, None, None, samples)
+    m = slice(10, None)
+    a = np.linalg.lstsq(np.c_[np.cos(2 * np.pi * f * t[m]), np.sin(2 * np.pi * f * t[m])],
+                        y[m], rcond=None)[0]
+    delay = np.arctan2(a[1], a[0]) / (2 * np.pi * f)
+    assert delay / dt == pytest.approx(samples, rel=0.01)
+
+
+def test_encoder_shapes_differ_from_the_catalogue():
+    h = _harness()
+    imu0, enc0 = h.make_record([], 11)
+    _, enc = h.make_record([('encoder_cyclic_error', 0)], 11)
+    err = enc.channels['encoder'] - enc0.channels['encoder']
+    phi = enc0.channels['encoder']
+    # 1st + 3rd harmonic on 1000 lines (the catalogue: 1st + 2nd on 2048).
+    cols = np.c_[np.sin(1000 * phi), np.cos(1000 * phi), np.sin(3000 * phi), np.cos(3000 * phi)]
+    c = np.linalg.lstsq(cols, err, rcond=None)[0]
+    assert np.hypot(c[0], c[1]) == pytest.approx(5e-5, rel=1e-6)
+    assert np.hypot(c[2], c[3]) == pytest.approx(2e-5, rel=1e-6)
+    imu1, enc1 = h.make_record([('timestamp_jitter', 1)], 11)
+    d = enc1.t - enc0.t
+    assert np.array_equal(imu1.t, imu0.t)
+    assert np.abs(d).max() <= 3e-4 and np.std(d) == pytest.approx(3e-4 / np.sqrt(3), rel=0.05)
+
+
+def test_report_counts_top1_ambiguity_and_false_alarms(capsys):
+    h = _harness()
+
+    def row(truth, selected, detected=True, ambiguous=()):
+        return {'mode': 'single', 'truth': truth, 'label': '', 'seed': 1, 'detected': detected,
+                'selected': selected, 'ambiguous': list(ambiguous), 'shrink': 0.8,
+                'shrink_excess': 0.9}
+    rows = [row(['time_delay'], ['time_delay']),
+            row(['time_delay'], ['g_sensitivity'], ambiguous=('g_sensitivity', 'time_delay')),
+            row(['scale_factor_asymmetry'], ['scale_factor_asymmetry']),
+            row(['scale_factor_asymmetry'], [], detected=False),
+            row([], []), row([], ['vibration'])]
+    h.report('single', rows)
+    out = capsys.readouterr().out
+    assert 'detected 3/4' in out
+    assert 'top-1 (first selected == truth) among detected 2/3 = 67 %' in out
+    assert 'flagged ambiguous with the truth: 1' in out
+    assert 'false alarms on clean records: 1/2' in out
