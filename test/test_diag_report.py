@@ -11,8 +11,8 @@ SWING_BLOCKS = ('in_phase', 'quadrature', 'harmonic_2f', 'harmonic_3f', 'residua
 
 
 def _toy(blocks):
-    sizes = {b: (1 if b in ('in_phase', 'quadrature', 'scale_factor_shift') else 4)
-             for b in blocks}
+    sizes = {b: (1 if b in ('in_phase', 'quadrature', 'scale_factor_shift')
+                 else 2 if b.startswith('harmonic') else 4) for b in blocks}
 
     def simulate(i, effects, s):
         rng = np.random.default_rng(s)

@@ -11,6 +11,7 @@ from typing import Dict, List
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import NullFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 
 TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
@@ -20,8 +21,8 @@ TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
           'drift': 'early mean − late mean (rad/s) vs span (s)',
           'in_phase': 'swing residual: sin θ component (rad)',
           'quadrature': 'swing residual: cos θ component (rad)',
-          'harmonic_2f': 'swing residual 2θ: sin (0), cos (1) (rad)',
-          'harmonic_3f': 'swing residual 3θ: sin (0), cos (1) (rad)',
+          'harmonic_2f': 'swing residual: 2θ components (rad)',
+          'harmonic_3f': 'swing residual: 3θ components (rad)',
           'residual_psd': 'residual rate PSD (log10 (rad/s)²/Hz) vs f (Hz)',
           'encoder_lines': 'encoder residual vs angle: peak (log10 rad) vs lines/rev',
           'rate_locked': 'rate-locked stamp variance (asinh σ²/µs²) vs |cos θ|',
@@ -29,13 +30,16 @@ TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
           'scale_factor_shift': "scale factor minus run 1's vs peak rate (rad/s)"}
 LOG_X = {'adev', 'psd', 'drift', 'residual_psd', 'encoder_lines'}
 COLUMNS = 3
+# Tick labels of the blocks whose elements are components rather than points of a curve.
+COMPONENTS = {'in_phase': ['sin θ'], 'quadrature': ['cos θ'], 'harmonic_2f': ['sin 2θ', 'cos 2θ'],
+              'harmonic_3f': ['sin 3θ', 'cos 3θ']}
 
 
 def _x(block: str, ranges: np.ndarray) -> np.ndarray:
     lo, hi = ranges[:, 0], ranges[:, 1]
     if block in ('psd', 'residual_psd'):
         return np.sqrt(lo * hi)
-    if block.startswith('harmonic') or block in ('in_phase', 'quadrature'):
+    if block in COMPONENTS:
         return np.arange(lo.size, dtype=float)
     if block in ('drift', 'scale_factor_shift'):
         return hi
@@ -43,12 +47,15 @@ def _x(block: str, ranges: np.ndarray) -> np.ndarray:
 
 
 def _band(ax, x, repeats: List[Dict[str, np.ndarray]], block: str, color: str, label: str):
-    stack = np.array([r[block] for r in repeats])
+    stack = np.array([r[block] for r in repeats], dtype=float)
     lo, mid, hi = np.percentile(stack, [16, 50, 84], axis=0)
     if x.size <= 2:  # a component or two (swing harmonics): points with 16-84 % bars
-        ax.errorbar(x + (0.04 if color == 'C2' else -0.04), mid, yerr=[mid - lo, hi - mid],
+        shift = (0.12 if block in COMPONENTS else 0.0) * (1 if color == 'C2' else -1)
+        ax.errorbar(x + shift, mid, yerr=[mid - lo, hi - mid],
                     fmt='o', color=color, ms=5, capsize=4, label=label)
         return
+    unscored = np.ptp(stack, axis=0) == 0
+    lo[unscored] = mid[unscored] = hi[unscored] = np.nan
     ax.fill_between(x, lo, hi, color=color, alpha=0.25, lw=0)
     ax.plot(x, mid, '-', color=color, lw=1.2, label=label)
 
@@ -70,9 +77,22 @@ def plot_diagnosis(diag, ranges: Dict[str, np.ndarray], path: str,
         _band(ax, x, base.repeats, block, 'C0', 'baseline (paper model) twins')
         if label:
             _band(ax, x, final.repeats, block, 'C2', label)
-        ax.plot(x, diag.reals[0][block], 'k.-', lw=0.8, ms=4, label='real record')
+        real = np.asarray(diag.reals[0][block], dtype=float).copy()
+        # Elements a block keeps but does not score (constant in every twin and the record,
+        # e.g. line bands above the encoder's angle Nyquist) are left out of the curve.
+        stack = np.array([r[block] for r in base.repeats])
+        real[(np.ptp(stack, axis=0) == 0) & (real == stack[0])] = np.nan
+        if block in COMPONENTS:
+            ax.plot(x, real, 'kD', ms=6, label='real record')
+            ax.set_xticks(x)
+            if x.size == len(COMPONENTS[block]):
+                ax.set_xticklabels(COMPONENTS[block])
+            ax.set_xlim(x[0] - 0.5, x[-1] + 0.5)
+        else:
+            ax.plot(x, real, 'k.-', lw=0.8, ms=4, label='real record')
         if block in LOG_X:
             ax.set_xscale('log')
+            ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_title(TITLES.get(block, block), fontsize=9)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
@@ -86,7 +106,8 @@ def plot_diagnosis(diag, ranges: Dict[str, np.ndarray], path: str,
     ax.set_yticks(range(len(names)))
     ax.set_yticklabels(names, fontsize=8)
     ax.invert_yaxis()
-    ax.set_xscale('log')
+    if max(gaps) > 10 * min(gaps):
+        ax.set_xscale('log')
     ax.set_title('gap (rms z, sim scatter units): alone and selected', fontsize=9)
     ax.legend(fontsize=8)
     for extra in axes[len(blocks) + 1:]:
