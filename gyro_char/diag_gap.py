@@ -21,11 +21,9 @@ import numpy as np
 
 GAP_METRIC = 'rms_z_in_baseline_scatter'
 # Scatter floors per block (in the block's own units): a sim that is deterministic in some
-# element must not turn a rounding difference into an infinite z (the swing ``in_phase`` is a
-# constant 0 by design: a floor so that it scores 0, not 0 / 0).
+# element must not turn a rounding difference into an infinite z.
 SCATTER_FLOOR = {'adev': 0.002, 'psd': 0.002, 'tone': 0.01, 'acf': 0.001, 'drift': 1e-9,
-                 'encoder_lines': 0.02, 'rate_locked': 0.002, 'increment_acf': 0.001,
-                 'in_phase': 1e-9}
+                 'encoder_lines': 0.02, 'rate_locked': 0.002, 'increment_acf': 0.001}
 Obs = Dict[str, np.ndarray]
 
 

@@ -8,14 +8,14 @@ gyro stamps), decomposed on the swing phase θ = ωt + ψ of the encoder's own s
 - ``quadrature``: the residual's cos θ component (rad). A stamp delay d leaves -A ω d cos θ;
   a g-sensitivity g_y leaves -g_y g A / ω cos θ - the same shape on one period and amplitude,
   hence the ambiguity the engine reports for that pair;
-- ``in_phase``: a constant 0 (scores nothing; kept so the block layout stays as consumers
-  expect). The residual's sin θ component is unobservable by construction: the encoder angle
-  is A sin θ plus the offset and trend the fit already carries, so ``(1 + Δρ)`` absorbs any
-  sin θ term (a g-sensitivity in phase with the angle, a scale-factor error alike). What the
+- no in-phase (sin θ) block: that component is unobservable in one run by construction - the
+  encoder angle is A sin θ plus the offset and trend the fit already carries, so ``(1 + Δρ)``
+  absorbs any sin θ term (a scale-factor error, anything in phase with the angle). What the
   fit's sin θ column read was the other harmonics leaking through the trend columns, about
-  2.5e-3 of sin 2θ (R² 0.99998 over 40 clean twins): a 0.1 µrad scatter carrying a copy of
-  sin 2θ's z, which doubled sin 2θ's weight in the gap and, on a seed where a few twins
-  happen to agree in sin 2θ, took the clean record's null 95 % level from ~2 to 4.5;
+  2.5e-3 of sin 2θ (R² 0.99998 over 40 clean twins): a copy of sin 2θ's z that doubled its
+  weight in the gap and, on a seed where a few twins happen to agree in sin 2θ, took a clean
+  record's null 95 % level from ~2 to 4.5. The in-phase information is the scale factor
+  itself: across runs it is the ``scale_factor_shift`` block (``diag_swing``);
 - ``harmonic_2f`` / ``harmonic_3f``: sin and cos of 2θ and 3θ (scale-factor asymmetry and the
   quadratic term give 2f, the cubic term 3f);
 - ``residual_psd``: log10 Welch PSD of the residual's rate (its difference over dt) in log bins
@@ -94,7 +94,7 @@ def layout(n_psd: int, dt: float, period_s: float) -> dict:
     # fall between encoder samples (linear interpolation), which says nothing about the gyro.
     edges = np.geomspace(1.0, 0.125 / dt, PSD_BINS + 1)
     lags = np.arange(1, ACF_LAGS + 1) * dt
-    return {'in_phase': np.array([[f0, f0]]), 'quadrature': np.array([[f0, f0]]),
+    return {'quadrature': np.array([[f0, f0]]),
             'harmonic_2f': np.array([[2 * f0, 2 * f0]] * 2),
             'harmonic_3f': np.array([[3 * f0, 3 * f0]] * 2),
             'residual_psd': np.c_[edges[:-1], edges[1:]],
@@ -103,7 +103,7 @@ def layout(n_psd: int, dt: float, period_s: float) -> dict:
             'increment_acf': np.c_[lags, lags]}
 
 
-UNITS = {'in_phase': 'Hz', 'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
+UNITS = {'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
          'residual_psd': 'Hz', 'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|',
          'increment_acf': 's'}
 
@@ -232,8 +232,8 @@ def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: n
     above = LINE_EDGES[1:] > nyquist
     peaks[above], where[above] = 1.0, np.nan
     th_e = w * 0.5 * (tau_e[1:] + tau_e[:-1]) + psi
-    # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not scored (module doc).
-    out = SwingObs({'in_phase': np.zeros(1), 'quadrature': h[1:2], 'harmonic_2f': h[2:4],
+    # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
+    out = SwingObs({'quadrature': h[1:2], 'harmonic_2f': h[2:4],
                     'harmonic_3f': h[4:6],
                     'residual_psd': np.log10(np.maximum(psd, 1e-300)),
                     'encoder_lines': np.log10(np.maximum(peaks, 1e-300)),

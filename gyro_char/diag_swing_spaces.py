@@ -65,7 +65,7 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
     as in ``diagnose.Problem``) the departures of all of them are projected together.
     The encoder cyclic error's line count is started at the records' line (``with_lines``).
     """
-    blocks = ('in_phase', 'quadrature', 'harmonic_2f', 'harmonic_3f')
+    blocks = ('quadrature', 'harmonic_2f', 'harmonic_3f')
     idx = range(len(reals))
     base = [simulate(i, [], 4242) for i in idx]
     dev = np.concatenate([reals[i][b] - base[i][b] for i in idx for b in blocks])

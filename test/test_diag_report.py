@@ -6,12 +6,12 @@ from gyro_char.diag_fit import EffectSpace, Param
 from gyro_char.report.diagnose import plot_diagnosis, TITLES
 import numpy as np
 
-SWING_BLOCKS = ('in_phase', 'quadrature', 'harmonic_2f', 'harmonic_3f', 'residual_psd',
+SWING_BLOCKS = ('quadrature', 'harmonic_2f', 'harmonic_3f', 'residual_psd',
                 'encoder_lines', 'rate_locked', 'increment_acf', 'scale_factor_shift')
 
 
 def _toy(blocks):
-    sizes = {b: (1 if b in ('in_phase', 'quadrature', 'scale_factor_shift')
+    sizes = {b: (1 if b in ('quadrature', 'scale_factor_shift')
                  else 2 if b.startswith('harmonic') else 4) for b in blocks}
 
     def simulate(i, effects, s):

@@ -6,7 +6,7 @@ Records: the bench simulator's ADIS16405 swing (gyro 200 Hz, encoder 1 kHz, 60 s
 (known parameters) or, for the blind diagnoses, with the validation harness's OTHER shapes
 (1st + 3rd harmonic cyclic error on 1000 lines, uniform encoder stamp errors).
 """
-from gyro_char import bench_sim, diag_gap, diag_swing, diag_swing_obs, diagnose
+from gyro_char import bench_sim, diag_swing, diag_swing_obs, diagnose
 from gyro_char.diag_fit import EffectSpace, Param
 from gyro_char.diag_swing_spaces import line_start, with_lines
 from gyro_char.recordings import ENCODER_CHANNEL, Recording
@@ -76,7 +76,7 @@ HARMONICS = ('quadrature', 'harmonic_2f', 'harmonic_3f')
 
 
 def test_sin_theta_error_is_absorbed_by_the_scale_factor(clean):
-    # Why ``in_phase`` is a constant: a gyro angle error c sin θ (c = 100 µrad, about the
+    # Why there is no in-phase block: a gyro angle error c sin θ (c = 100 µrad, about the
     # quadrature's scatter) in phase with the encoder angle is a scale-factor change, which the
     # fit's (1 + Δρ) takes; no harmonic block moves by more than 0.2 % of c.
     imu, enc, o0 = clean
@@ -90,18 +90,7 @@ def test_sin_theta_error_is_absorbed_by_the_scale_factor(clean):
     rate = imu.channels['gyro_x'] - c * w * np.sin(w * imu.t + phase)
     o2 = _obs(Recording(imu.t, {'gyro_x': rate}, imu.source), enc)
     assert o2['quadrature'][0] - o0['quadrature'][0] == pytest.approx(c, rel=0.02)
-    assert o0['in_phase'].tolist() == o1['in_phase'].tolist() == [0.0]
-
-
-def test_in_phase_scores_nothing_among_twins(clean):
-    # The constant block gets the floor, not a 0 scatter: z is 0, never 0 / 0.
-    reps = [_obs(*_record(seed=s)) for s in (21, 22, 23)]
-    stats = diag_gap.sim_stats(reps)
-    assert stats.std['in_phase'][0] == diag_gap.SCATTER_FLOOR['in_phase']
-    z = diag_gap.zscores(clean[2], stats)
-    assert z['in_phase'].tolist() == [0.0]
-    assert all(np.all(np.isfinite(v)) for v in z.values())
-    assert np.all(stats.std['harmonic_2f'] > 1e3 * diag_gap.SCATTER_FLOOR['in_phase'])
+    assert 'in_phase' not in o0
 
 
 def test_catalogue_cyclic_error_peaks_at_its_line_count(clean):

@@ -19,7 +19,6 @@ TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
           'tone': 'tone prominence (log10) vs band centre (Hz)',
           'acf': 'autocorrelation vs lag (samples)',
           'drift': 'early mean − late mean (rad/s) vs span (s)',
-          'in_phase': 'swing residual: sin θ component (rad)',
           'quadrature': 'swing residual: cos θ component (rad)',
           'harmonic_2f': 'swing residual: 2θ components (rad)',
           'harmonic_3f': 'swing residual: 3θ components (rad)',
@@ -31,7 +30,7 @@ TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
 LOG_X = {'adev', 'psd', 'drift', 'residual_psd', 'encoder_lines'}
 COLUMNS = 3
 # Tick labels of the blocks whose elements are components rather than points of a curve.
-COMPONENTS = {'in_phase': ['sin θ'], 'quadrature': ['cos θ'], 'harmonic_2f': ['sin 2θ', 'cos 2θ'],
+COMPONENTS = {'quadrature': ['cos θ'], 'harmonic_2f': ['sin 2θ', 'cos 2θ'],
               'harmonic_3f': ['sin 3θ', 'cos 3θ']}
 
 
