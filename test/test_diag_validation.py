@@ -1,20 +1,12 @@
 # Blind validation, small version of bench/validate_diagnosis.py: effects generated with shapes
 # the package catalogue does not have (Hann FIR, amplitude-modulated tone, white angle error),
 # not announced to the diagnosis; a clean baseline record must raise no effect.
-import importlib.util
-from pathlib import Path
-
+import bench_script
 import numpy as np
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _harness():
-    spec = importlib.util.spec_from_file_location(
-        'validate_diagnosis', ROOT / 'bench' / 'validate_diagnosis.py')
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return bench_script.load('validate_diagnosis')
 
 
 def test_blind_diagnosis_names_unannounced_effects_and_stays_quiet_on_clean_data():

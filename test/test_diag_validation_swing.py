@@ -1,20 +1,12 @@
 # The swing validation harness (bench/validate_diagnosis_swing.py): its effect shapes are what
 # it says they are, and its report counts top-1, ambiguity and false alarms as documented.
-import importlib.util
-from pathlib import Path
-
+import bench_script
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _harness():
-    spec = importlib.util.spec_from_file_location(
-        'validate_diagnosis_swing', ROOT / 'bench' / 'validate_diagnosis_swing.py')
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return bench_script.load('validate_diagnosis_swing')
 
 
 @pytest.mark.parametrize('samples', [0.23, 0.61])

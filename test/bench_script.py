@@ -1,0 +1,14 @@
+"""Load a ``bench/`` script as a module (the bench directory is not a package)."""
+import importlib.util
+from pathlib import Path
+from types import ModuleType
+
+BENCH = Path(__file__).resolve().parents[1] / 'bench'
+
+
+def load(name: str) -> ModuleType:
+    """Return ``bench/<name>.py`` imported under its own name."""
+    spec = importlib.util.spec_from_file_location(name, BENCH / f'{name}.py')
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
