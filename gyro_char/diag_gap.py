@@ -15,7 +15,7 @@ repeat of the model scored against the other repeats with the same yardstick (le
 is recomputed for every model, and "within the sim's own scatter" is judged against it.
 """
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence
+from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -96,21 +96,25 @@ def locate(z: Obs, ranges: Dict[str, np.ndarray], units: Dict[str, str], *,
 
 
 def null_gaps(stats: Sequence[SimStats],
-              ref_stats: Optional[Sequence[SimStats]] = None) -> np.ndarray:
+              ref_stats: Optional[Sequence[SimStats]] = None,
+              yardstick: Optional[Callable[[int], List[Obs]]] = None) -> np.ndarray:
     """
     Gap of each repeat against the other repeats: the gap's distribution under the model.
 
     With several records, repeat k of every record plays the real records together. The
     yardstick is the scatter of ``ref_stats`` (the baseline's twins) without repeat k, or of
     the model's other repeats: in both cases a scatter the left-out repeat took no part in, as
-    the real record took no part in the scatter it is scored in.
+    the real record took no part in the scatter it is scored in. ``yardstick(k)``, if given,
+    supplies that scatter per record instead (it too must leave repeat k out).
     """
     k_max = min(len(s.repeats) for s in stats)
     out = []
     for k in range(k_max):
         reals = [s.repeats[k] for s in stats]
         others = [sim_stats(s.repeats[:k] + s.repeats[k + 1:]) for s in stats]
-        if ref_stats is None:
+        if yardstick is not None:
+            refs = yardstick(k)
+        elif ref_stats is None:
             refs = [o.std for o in others]
         else:
             refs = [sim_stats(r.repeats[:k] + r.repeats[k + 1:]).std for r in ref_stats]

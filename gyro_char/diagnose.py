@@ -189,15 +189,6 @@ def _gap_in(objective: GapObjective, ev: Evaluation, scatters: Sequence[Evaluati
     return diag_gap.multi_gap(objective.reals, ev.stats, _yardstick(scatters))
 
 
-def _null_in(model: Evaluation, scatters: Sequence[Evaluation]) -> np.ndarray:
-    """Leave-one-out gaps of ``model``'s twins against its others, in ``_yardstick``."""
-    k_max = min(len(s.repeats) for s in model.stats)
-    return np.array([diag_gap.multi_gap(
-        [s.repeats[k] for s in model.stats],
-        [diag_gap.sim_stats(s.repeats[:k] + s.repeats[k + 1:]) for s in model.stats],
-        _yardstick(scatters, k)) for k in range(k_max)])
-
-
 def _look_alikes(names: Sequence[str]) -> bool:
     """Tell whether every pair of ``names`` is a known look-alike pair (``SEPARATING_RUNS``)."""
     return all(frozenset({a, b}) in SEPARATING_RUNS
@@ -311,7 +302,8 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         # its own spread. Never below the baseline's levels: a 95th percentile of a few
         # repeats is noisy.
         scatters = [base, current]
-        null_now = _null_in(current, scatters)
+        null_now = diag_gap.null_gaps(
+            current.stats, yardstick=lambda k: _yardstick(scatters, k))
         explained = max(base_explained, float(np.quantile(null_now, 0.95)))
         shrink_needed = max(base_needed, 2.0 * float(np.std(null_now, ddof=1)))
         gap_now = _gap_in(objective, current, scatters)
