@@ -12,7 +12,7 @@ from typing import List, Optional
 
 from gyro_char.errors import InputError
 
-SUBCOMMANDS = ('allan', 'swing', 'simulate', 'diagnose', 'demo')
+SUBCOMMANDS = ('allan', 'swing', 'simulate', 'diagnose', 'demo', 'fleet')
 
 
 class _Parser(argparse.ArgumentParser):

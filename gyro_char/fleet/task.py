@@ -1,0 +1,70 @@
+"""
+The fleet's unit of work, run inside a Dask worker: one device's recording through its job.
+
+The task receives a path (never data), reads the recording itself, runs the job in a private
+temporary directory and returns the files the command wrote as bytes with the tidy
+measurements. It touches nothing shared, so a task the scheduler re-runs after a worker died
+(or runs twice) does no harm: the client writes each device's outputs once, atomically.
+"""
+import argparse
+import io
+import os
+import resource
+import shutil
+import sys
+import tempfile
+import time
+import traceback
+from typing import Dict
+
+from gyro_char.errors import InputError
+from gyro_char.jobs import job_module
+from gyro_char.jobs.base import Console
+
+
+def peak_rss_bytes() -> int:
+    """Peak resident memory of this process so far (bytes)."""
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return int(peak if sys.platform == 'darwin' else peak * 1024)
+
+
+def run_device(device: str, path: str, kind: str, options: Dict) -> Dict:
+    """
+    Run the ``kind`` job on one recording; return its outcome as plain data.
+
+    Returns
+    -------
+    dict
+        ``device, status ('ok' | 'error'), message, measurements, files ({name: bytes}), log,
+        cacheable`` (False for errors that are not the input's: a retry may succeed),
+        ``seconds, peak_rss, pid, host``.
+    """
+    start = time.perf_counter()
+    job = job_module(kind)
+    log = io.StringIO()
+    out = tempfile.mkdtemp(prefix='gyro-char-fleet-')
+    status, message, cacheable, measurements = 'ok', '', True, []
+    try:
+        args = argparse.Namespace(**job.recording_args(path), out=out, quiet=True, **options)
+        try:
+            measurements = job.run(args, Console(log, log))
+        except InputError as exc:
+            status, message = 'error', str(exc)
+        except MemoryError:
+            status, message, cacheable = 'error', 'out of memory', False
+        except Exception as exc:  # noqa: B902 - one bad recording must not stop the batch
+            status, cacheable = 'error', False
+            message = f'internal error: {type(exc).__name__}: {exc}'.splitlines()[0]
+            log.write(traceback.format_exc())
+        files = {}
+        for name in sorted(os.listdir(out)):
+            p = os.path.join(out, name)
+            if os.path.isfile(p):
+                with open(p, 'rb') as fh:
+                    files[name] = fh.read()
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    return {'device': device, 'status': status, 'message': message,
+            'measurements': measurements, 'files': files, 'log': log.getvalue(),
+            'cacheable': cacheable, 'seconds': time.perf_counter() - start,
+            'peak_rss': peak_rss_bytes(), 'pid': os.getpid(), 'host': os.uname().nodename}
