@@ -13,10 +13,11 @@ would read off inside the filtered region) and the strongest spectral line above
 import argparse
 from pathlib import Path
 
-from gyro_char.allan_input import compute
-from gyro_char.noise_fit import fit_result
-from gyro_char.noise_model import to_human
-from gyro_char.recordings import GYRO_CHANNELS, read_imu
+from gyro_char.allan.compute import compute
+from gyro_char.allan.fit import fit_result
+from gyro_char.io import read_imu
+from gyro_char.records import GYRO_CHANNELS
+from gyro_char.units import to_human
 import numpy as np
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'adis16405'

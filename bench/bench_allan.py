@@ -12,7 +12,7 @@ import argparse
 import time
 
 import allantools
-from gyro_char.allan import m_grid, numba, overlapping_avar
+from gyro_char.allan.kernel import m_grid, numba, overlapping_avar
 import numpy as np
 from timing import best_of
 

@@ -24,9 +24,9 @@ import tempfile
 import time
 
 import allantools
-from gyro_char.allan import m_grid
-from gyro_char.noise_model import design_matrix
-from gyro_char.recordings import read_imu
+from gyro_char.allan.kernel import m_grid
+from gyro_char.allan.model import design_matrix
+from gyro_char.io import read_imu
 import numpy as np
 from scipy import optimize
 

@@ -15,7 +15,7 @@ In the ``mixed`` and ``three`` cases the encoder topic is measured the same way
 Cases:
 
 - ``imu``: N sensor_msgs/Imu messages (default 3.6 M: 3 h at 333 Hz) written with
-  ``gyro_char.recordings.write_bag``, sqlite3 and mcap: one record size per MCAP chunk;
+  ``gyro_char.io.write_bag``, sqlite3 and mcap: one record size per MCAP chunk;
 - ``mixed``: N/4 Imu + N/4 JointState merged by stamp (``write_bag`` with an encoder), mcap:
   every chunk mixes two record sizes, as ``ros2 bag record`` logs several topics;
 - ``noindex``: the ``mixed`` bag with its message index records made private records (as from
@@ -36,13 +36,14 @@ import sys
 import tempfile
 import time
 
-from gyro_char.ingest.bag_read import read_imu_bag
-from gyro_char.ingest.bag_write import (IMU_TYPE, joint_state_encoder, JOINT_TYPE, stamps_ns,
-                                        typestore)
-from gyro_char.ingest.cdr import encode_imu
-from gyro_char.ingest.encoder_read import read_encoder_bag
-from gyro_char.ingest.sanitize import sanitize
-from gyro_char.recordings import ENCODER_CHANNEL, IMU_CHANNELS, Recording, write_bag
+from gyro_char.io import write_bag
+from gyro_char.io.bag_read import read_imu_bag
+from gyro_char.io.bag_write import IMU_TYPE, joint_state_encoder, JOINT_TYPE, stamps_ns
+from gyro_char.io.cdr import encode_imu
+from gyro_char.io.encoder_read import read_encoder_bag
+from gyro_char.io.sanitize import sanitize
+from gyro_char.io.typestore import typestore
+from gyro_char.records import ENCODER_CHANNEL, IMU_CHANNELS, Recording
 from msg_adapters import imu_sample, joint_angle
 import numpy as np
 from rosbags.highlevel import AnyReader

@@ -19,7 +19,7 @@ import math
 import sys
 import time
 
-from gyro_char.bench_sim import simulate_static, simulate_swing
+from gyro_char.sim.simulator import simulate_static, simulate_swing
 from msg_adapters import fill_imu, to_stamp
 import numpy as np
 import rclpy

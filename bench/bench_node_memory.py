@@ -23,7 +23,7 @@ import argparse
 import sys
 import time
 
-from gyro_char.allan_live import AllanLive, return_freed_memory
+from gyro_char.live.allan_live import AllanLive, return_freed_memory
 import numpy as np
 
 

@@ -12,8 +12,9 @@ t = 5000 s, which must be found.
 from pathlib import Path
 import sys
 
-from gyro_char.motion_detect import MotionDetector
-from gyro_char.recordings import IMU_CHANNELS, read_imu
+from gyro_char.io import read_imu
+from gyro_char.live.motion_detect import MotionDetector
+from gyro_char.records import IMU_CHANNELS
 import numpy as np
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'adis16405'

@@ -24,7 +24,7 @@ import time
 ROOT = Path(__file__).resolve().parents[1]
 BARE = r"""
 import sys, time, rclpy
-from gyro_char.nodes.node_common import make_executor, sensor_qos
+from gyro_char.nodes.common import make_executor, sensor_qos
 from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import Imu, JointState
 rclpy.init()

@@ -15,9 +15,9 @@ import tempfile
 import time
 
 import allantools
-from gyro_char.bench_sim import simulate_static, simulate_swing
-from gyro_char.commands.simulate import write_record
-from gyro_char.sim_config import load
+from gyro_char.cli.commands.simulate import write_record
+from gyro_char.sim.config import load
+from gyro_char.sim.simulator import simulate_static, simulate_swing
 from timing import best_of
 
 

@@ -25,12 +25,12 @@ posterior to 1e-10 sigma; see ``exact_posterior``.
 import argparse
 from fractions import Fraction
 
-from gyro_char import swing_batch
-from gyro_char.bench_sim import simulate_swing
-from gyro_char.swing_align import integrate
-from gyro_char.swing_kf import estimate_swing, SwingKalman
-from gyro_char.swing_model import GYRO_ANCHOR_S, PRIOR_SD, regressor, SwingNoise, transition
-from gyro_char.swing_online import SwingOnline
+from gyro_char.live.swing_online import SwingOnline
+from gyro_char.sim.simulator import simulate_swing
+from gyro_char.swing import batch as swing_batch
+from gyro_char.swing.align import integrate
+from gyro_char.swing.filter import estimate_swing, SwingKalman
+from gyro_char.swing.model import GYRO_ANCHOR_S, PRIOR_SD, regressor, SwingNoise, transition
 import numpy as np
 from timing import best_of
 

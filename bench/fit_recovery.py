@@ -1,9 +1,9 @@
 """
 Recovery of the IEEE 952 coefficients on synthetic static records with known truth.
 
-White + 1/f flicker + rate random walk + quantization + ramp (``gyro_char.noise_gen``), default
+White + 1/f flicker + rate random walk + quantization + ramp (``gyro_char.sim.noise_gen``), default
 8 h at 200 Hz, several seeds; Allan variance on the paper's grid, then the fits ('l1', the
-paper's objective, 'l1w' and 'weighted', see gyro_char.noise_fit). Prints, per seed, the
+paper's objective, 'l1w' and 'weighted', see gyro_char.allan.fit). Prints, per seed, the
 relative error of each coefficient and whether the term was resolved, then the median |error|
 per term and how often the 68 % interval held the truth (it should be about 68 %).
 
@@ -13,11 +13,12 @@ per term and how often the 68 % interval held the truth (it should be about 68 %
 import argparse
 import time
 
-from gyro_char.allan_input import compute
-from gyro_char.noise_fit import fit_result
-from gyro_char.noise_gen import generate
-from gyro_char.noise_model import HUMAN_UNITS, TERMS, to_human
-from gyro_char.recordings import Recording
+from gyro_char.allan.compute import compute
+from gyro_char.allan.fit import fit_result
+from gyro_char.allan.model import TERMS
+from gyro_char.records import Recording
+from gyro_char.sim.noise_gen import generate
+from gyro_char.units import HUMAN_UNITS, to_human
 import numpy as np
 
 DEG = np.pi / 180.0

@@ -8,7 +8,7 @@ Monte Carlo method error of the swing filter beside the paper's figures (0.999 c
     python bench/mc_swing.py --study mems --runs 200 --amplitude-scale 2 # what halves d_rho
     python bench/mc_swing.py --study mems --runs 200 --full-noise        # + bias instability
 
-Setups (``gyro_char.swing_mc``; every number is printed with the result): the simulator's
+Setups (``gyro_char.sim.monte_carlo``; every number is printed with the result): the simulator's
 ``vg910`` (FOG) and ``adis16405`` (MEMS) presets - stand A = 20 deg, T = 5 s, 15 min; encoder
 d1 = 2 pi / 2^20, d2 = 2 pi / 2^22, ADC noise 3 urad, jitter 20 us; gyro errors from the
 paper's Table 1 (scale factor, bias, drift), misalignment 0.5 deg with 0.1 mrad white
@@ -20,7 +20,7 @@ import json
 import time
 
 from gyro_char.progress import progress
-from gyro_char.swing_mc import monte_carlo, PAPER, STUDY
+from gyro_char.sim.monte_carlo import monte_carlo, PAPER, STUDY
 
 ROWS = (
     ('sfe_pp', 'scale-factor error, error [pp of %]', 'interval', PAPER['scale_factor_error_pp']),

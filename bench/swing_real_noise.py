@@ -17,8 +17,9 @@ import argparse
 import glob
 import os
 
-from gyro_char.recordings import read_imu, Recording
-from gyro_char.swing_kf import estimate_swing
+from gyro_char.io import read_imu
+from gyro_char.records import Recording
+from gyro_char.swing.filter import estimate_swing
 import numpy as np
 
 DATA = os.path.join(os.path.dirname(__file__), '..', '..', 'shared', 'data', 'adis16405')

@@ -6,7 +6,7 @@ diagnosis blind, and prints a confusion table, top-1 accuracy, median gap shrink
 false-alarm rate on clean baseline records.
 
 The effects are generated here with shapes that differ from the package catalogue's
-(``gyro_char.effects``), so that the diagnosis is not rewarded for recognising its own
+(``gyro_char.sim.effects``), so that the diagnosis is not rewarded for recognising its own
 generator:
 
 - internal_lowpass: a Hann-window FIR at the output rate (catalogue: cascaded moving averages
@@ -32,7 +32,7 @@ import os
 import sys
 import time
 
-from gyro_char import diag_static, diagnose
+from gyro_char.diagnosis import engine as diagnose, static as diag_static
 import numpy as np
 from scipy import signal
 

@@ -3,7 +3,7 @@ Blind validation of ``gyro-char diagnose --kind swing`` (the swing part of valid
 
 Clean swing records come from the bench simulator (the paper's model, ADIS16405 preset, gyro
 at 200 Hz, encoder at 1 kHz, 60 s); the effect is then added HERE, to the finished record, with
-shapes that differ from the catalogue's (``gyro_char.effects_*``), and the diagnosis is not told:
+shapes that differ from the catalogue's (``gyro_char.sim.effects``), and the diagnosis is not told:
 
 - time_delay: a sensor-internal group delay of a fractional number of samples, applied to the
   rate values by a 4-tap Lagrange interpolation FIR (catalogue: the stamps are shifted);
@@ -42,9 +42,10 @@ import argparse
 import sys
 import time
 
-from gyro_char import bench_sim, diag_swing, diagnose
-from gyro_char.recordings import ENCODER_CHANNEL, Recording
-from gyro_char.sim_config import BenchConfig
+from gyro_char.diagnosis import engine as diagnose, swing as diag_swing
+from gyro_char.records import ENCODER_CHANNEL, Recording
+from gyro_char.sim import simulator
+from gyro_char.sim.config import BenchConfig
 import numpy as np
 
 RATE_HZ = 200.0
@@ -103,7 +104,7 @@ def make_record(truth, seed, period=PERIOD):
     """IMU and encoder of one run with the harness-shaped effects ``[(name, level), ...]``."""
     cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': RATE_HZ},
                                                 'stand': {'period_s': period}})
-    run = bench_sim.simulate_swing(cfg, duration=DURATION, seed=seed, channels=('gyro_x',))
+    run = simulator.simulate_swing(cfg, duration=DURATION, seed=seed, channels=('gyro_x',))
     imu, enc = run.imu, run.encoder
     rng = np.random.default_rng(seed + 99)
     for name, level in truth:

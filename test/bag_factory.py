@@ -1,7 +1,7 @@
 """Small real bags for the ingest tests, written with rosbags' own per-message writers."""
 from pathlib import Path
 
-from gyro_char.recordings import IMU_CHANNELS, Recording
+from gyro_char.records import IMU_CHANNELS, Recording
 import numpy as np
 from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer

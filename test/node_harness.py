@@ -10,7 +10,7 @@ import time
 from typing import Callable, Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray
-from gyro_char.nodes import node_common
+from gyro_char.nodes import common as node_common
 from msg_adapters import fill_imu, to_stamp
 from msg_adapters.diagnostics import level_of, parse_key_values
 import rclpy

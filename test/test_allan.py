@@ -1,11 +1,13 @@
 """Overlapping Allan variance: grid, kernel against allantools, EDF / intervals, bad input."""
 import allantools
 import allantools.ci as aci
-from gyro_char.allan import m_grid, overlapping_avar, tau_grid, taus_to_m
-from gyro_char.allan_edf import (add_confidence, alpha_from_acf, chi2_interval, edf_oadev)
-from gyro_char.allan_input import compute
-from gyro_char.noise_gen import generate
-from gyro_char.recordings import InputError, read_imu, Recording
+from gyro_char.allan.compute import compute
+from gyro_char.allan.edf import add_confidence, alpha_from_acf, chi2_interval, edf_oadev
+from gyro_char.allan.kernel import m_grid, overlapping_avar, tau_grid, taus_to_m
+from gyro_char.errors import InputError
+from gyro_char.io import read_imu
+from gyro_char.records import Recording
+from gyro_char.sim.noise_gen import generate
 import numpy as np
 import pytest
 

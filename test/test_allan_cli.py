@@ -2,7 +2,7 @@
 import json
 
 from gyro_char.cli import main
-from gyro_char.noise_gen import generate
+from gyro_char.sim.noise_gen import generate
 import numpy as np
 import pytest
 import yaml

@@ -1,9 +1,9 @@
 """Streaming Allan accumulator: batch-equal sums, bounded memory, checkpoint / restore."""
-from gyro_char.allan import overlapping_avar
-from gyro_char.allan_edf import alpha_from_slope
-from gyro_char.allan_stream import AllanAccumulator
-from gyro_char.noise_gen import generate
-from gyro_char.recordings import InputError
+from gyro_char.allan.edf import alpha_from_slope
+from gyro_char.allan.kernel import overlapping_avar
+from gyro_char.allan.stream import AllanAccumulator
+from gyro_char.errors import InputError
+from gyro_char.sim.noise_gen import generate
 import numpy as np
 import pytest
 
@@ -80,7 +80,7 @@ def test_slope_noise_id():
 
 
 def test_stream_result_feeds_the_fit():
-    from gyro_char.noise_fit import fit_result
+    from gyro_char.allan.fit import fit_result
     rate = generate(100_000, DT, N=2e-3, rng=np.random.default_rng(9))
     acc = AllanAccumulator(DT, 1, m_max=8192, channels=('gyro_z',))
     for chunk in np.array_split(rate, 37):

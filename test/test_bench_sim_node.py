@@ -8,8 +8,8 @@ are refused with a reason.
 import subprocess
 import sys
 
-from gyro_char.bench_sim import simulate_static, simulate_swing
-from gyro_char.sim_config import load
+from gyro_char.sim.config import load
+from gyro_char.sim.simulator import simulate_static, simulate_swing
 import numpy as np
 import pytest
 
@@ -93,7 +93,7 @@ def test_parameters_are_validated(context):
         assert desc.description and desc.floating_point_range
     finally:
         node.destroy_node()
-    from gyro_char.recordings import InputError
+    from gyro_char.errors import InputError
     with pytest.raises(InputError):
         BenchSimNode(context=context, parameter_overrides=[Parameter('kind', value='moving')])
 
@@ -173,7 +173,7 @@ def test_repeat_continues_stamps_with_the_next_seed(context):
 
 
 def test_unknown_effect_is_refused_in_process(context):
-    from gyro_char.recordings import InputError
+    from gyro_char.errors import InputError
     with pytest.raises(InputError, match='unknown effect'):
         BenchSimNode(context=context, parameter_overrides=[
             Parameter('effects', value=['warp_drive'])])

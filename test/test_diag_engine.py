@@ -1,6 +1,6 @@
 # The diagnosis engine on a toy problem with known answers: ranking, greedy stop, ambiguity.
-from gyro_char import diagnose
-from gyro_char.diag_fit import EffectSpace, Param
+from gyro_char.diagnosis import engine as diagnose
+from gyro_char.diagnosis.fit import EffectSpace, Param
 import numpy as np
 import pytest
 

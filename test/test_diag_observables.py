@@ -1,7 +1,7 @@
 # Observables and the gap of the sim-to-real diagnosis, against closed forms on synthetic data.
-from gyro_char import diag_gap
-from gyro_char import diag_observables as obs
-from gyro_char import diag_static
+from gyro_char.diagnosis import gap as diag_gap
+from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis import static as diag_static
 import numpy as np
 from scipy import signal
 
@@ -94,7 +94,7 @@ def test_observables_on_the_real_adis16405_record_match_what_is_known(adis_recor
     # Outside reference: the shared data's README (0.05 deg/s step, lag-1 autocorrelation
     # ~0.2-0.3 from the internal averaging, ARW 2.2-2.8 deg/sqrt(h) from ADEV at 1 s, a Z tone
     # near 17-21 Hz) - measured here with the diagnosis's own observables.
-    from gyro_char.recordings import read_imu
+    from gyro_char.io import read_imu
     rec = read_imu(str(adis_records[0]), quiet=True)
     n = 2 ** 16
     for ch in ('gyro_x', 'gyro_y', 'gyro_z'):

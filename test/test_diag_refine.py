@@ -1,6 +1,6 @@
 # The diagnosis engine's structural choices and joint refit, on toy problems with known answers.
-from gyro_char import diagnose
-from gyro_char.diag_fit import EffectSpace, fit_effect, GapObjective, Param
+from gyro_char.diagnosis import engine as diagnose
+from gyro_char.diagnosis.fit import EffectSpace, fit_effect, GapObjective, Param
 import numpy as np
 
 X = np.linspace(0, 1, 16)

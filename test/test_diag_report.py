@@ -1,9 +1,9 @@
 # The diagnosis figure has a panel for every observable block, however many the kind has.
 import os
 
-from gyro_char import diagnose
-from gyro_char.diag_fit import EffectSpace, Param
-from gyro_char.report.diagnose import plot_diagnosis, TITLES
+from gyro_char.diagnosis import engine as diagnose
+from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.report.diagnosis_plot import plot_diagnosis, TITLES
 import numpy as np
 
 SWING_BLOCKS = ('quadrature', 'harmonic_2f', 'harmonic_3f', 'residual_psd',

@@ -1,7 +1,9 @@
 # The swing kind of the diagnosis on simulated swing records with an effect it is not told of.
-from gyro_char import bench_sim, diag_gap, diag_swing, diag_swing_obs, diagnose
-from gyro_char.sim_config import BenchConfig
-from gyro_char.swing_kf import estimate_swing
+from gyro_char.diagnosis import (engine as diagnose, gap as diag_gap, swing as diag_swing,
+                                 swing_obs as diag_swing_obs)
+from gyro_char.sim import simulator
+from gyro_char.sim.config import BenchConfig
+from gyro_char.swing.filter import estimate_swing
 import numpy as np
 import pytest
 
@@ -13,7 +15,7 @@ def _record(effects, seed, period=5.0):
     cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': RATE_HZ},
                                                 'stand': {'period_s': period}})
     effects = [{'name': n, 'params': p} for n, p in effects]
-    run = bench_sim.simulate_swing(cfg, duration=DURATION, seed=seed, effects=effects,
+    run = simulator.simulate_swing(cfg, duration=DURATION, seed=seed, effects=effects,
                                    channels=('gyro_x',))
     return run.imu, run.encoder
 

@@ -6,11 +6,13 @@ Records: the bench simulator's ADIS16405 swing (gyro 200 Hz, encoder 1 kHz, 60 s
 (known parameters) or, for the blind diagnoses, with the validation harness's OTHER shapes
 (1st + 3rd harmonic cyclic error on 1000 lines, uniform encoder stamp errors).
 """
-from gyro_char import bench_sim, diag_swing, diag_swing_obs, diagnose
-from gyro_char.diag_fit import EffectSpace, Param
-from gyro_char.diag_swing_spaces import line_start, with_lines
-from gyro_char.recordings import ENCODER_CHANNEL, Recording
-from gyro_char.sim_config import BenchConfig
+from gyro_char.diagnosis import (engine as diagnose, swing as diag_swing,
+                                 swing_obs as diag_swing_obs)
+from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.swing_spaces import line_start, with_lines
+from gyro_char.records import ENCODER_CHANNEL, Recording
+from gyro_char.sim import simulator
+from gyro_char.sim.config import BenchConfig
 import numpy as np
 import pytest
 
@@ -22,7 +24,7 @@ def _cfg():
 
 
 def _record(seed=11, effects=()):
-    run = bench_sim.simulate_swing(_cfg(), duration=60.0, seed=seed, effects=effects,
+    run = simulator.simulate_swing(_cfg(), duration=60.0, seed=seed, effects=effects,
                                    channels=('gyro_x',))
     return run.imu, run.encoder
 

@@ -1,7 +1,8 @@
 # internal_lowpass with a 1-tap kernel is the identity filter (no lfilter_zi on a length-1 kernel);
 # the 3-stage (CIC) filter the diagnosis searches.
-from gyro_char import bench_sim, diag_observables, diag_static
-from gyro_char.effects import EFFECTS
+from gyro_char.diagnosis import observables as diag_observables, static as diag_static
+from gyro_char.sim import simulator
+from gyro_char.sim.effects import EFFECTS
 import numpy as np
 import pytest
 
@@ -16,8 +17,8 @@ def test_one_tap_lowpass_is_the_identity():
 
 
 def test_one_tap_lowpass_leaves_a_simulated_record_unchanged():
-    clean = bench_sim.simulate_static(duration=2.0, seed=5, channels=('gyro_x',))
-    one = bench_sim.simulate_static(duration=2.0, seed=5, channels=('gyro_x',),
+    clean = simulator.simulate_static(duration=2.0, seed=5, channels=('gyro_x',))
+    one = simulator.simulate_static(duration=2.0, seed=5, channels=('gyro_x',),
                                     effects=[{'name': 'internal_lowpass',
                                               'params': {'taps': 1.0}}])
     assert np.array_equal(clean.imu.channels['gyro_x'], one.imu.channels['gyro_x'])

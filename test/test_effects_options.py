@@ -1,10 +1,10 @@
 # Optional catalogue shapes against closed forms: gauss_markov order 2 (two first-order stages
 # in cascade), quantization with dither (white angle error); the defaults are unchanged.
-from gyro_char import bench_sim
-from gyro_char.effects import EFFECTS
-from gyro_char.effects_sensor import second_order_gm
-from gyro_char.recordings import InputError
-from gyro_char.sim_config import BenchConfig
+from gyro_char.errors import InputError
+from gyro_char.sim import simulator
+from gyro_char.sim.config import BenchConfig
+from gyro_char.sim.effects import EFFECTS
+from gyro_char.sim.effects.sensor import second_order_gm
 import numpy as np
 import pytest
 
@@ -34,7 +34,7 @@ def test_order_two_record_has_sigma_and_the_cascade_correlation():
     sigma, tc, dt = 0.02, 0.2, DT
     fx = [{'name': 'gauss_markov', 'params': {'sigma': sigma, 'tau_s': tc, 'axis': 0.0,
                                               'order': 2.0}}]
-    x = bench_sim.simulate_static(_quiet_config(), duration=600.0, seed=4, channels=('gyro_x',),
+    x = simulator.simulate_static(_quiet_config(), duration=600.0, seed=4, channels=('gyro_x',),
                                   effects=fx).imu.channels['gyro_x']
     y = x - x.mean()
     assert np.std(y) == pytest.approx(sigma, rel=0.1)
@@ -48,9 +48,9 @@ def test_order_two_record_has_sigma_and_the_cascade_correlation():
 def test_order_is_checked_and_defaults_to_the_first_order_process():
     with pytest.raises(InputError):
         EFFECTS['gauss_markov'](order=3)
-    one = bench_sim.simulate_static(duration=5.0, seed=2, channels=('gyro_x',),
+    one = simulator.simulate_static(duration=5.0, seed=2, channels=('gyro_x',),
                                     effects=['gauss_markov:sigma=0.01,tau_s=0.5,axis=0'])
-    same = bench_sim.simulate_static(duration=5.0, seed=2, channels=('gyro_x',),
+    same = simulator.simulate_static(duration=5.0, seed=2, channels=('gyro_x',),
                                      effects=['gauss_markov:sigma=0.01,tau_s=0.5,axis=0,'
                                               'order=1'])
     assert np.array_equal(one.imu.channels['gyro_x'], same.imu.channels['gyro_x'])
@@ -62,7 +62,7 @@ def test_dithered_angle_quantization_makes_the_angle_error_white(dither, rms, la
     # Per-sample angle increments 10x finer than the step: without dither the angle error is
     # correlated from sample to sample; with it, white of variance step^2 / 6.
     step, cfg = 1e-4, _quiet_config(1e-4)
-    runs = [bench_sim.simulate_static(cfg, duration=600.0, seed=4, channels=('gyro_x',),
+    runs = [simulator.simulate_static(cfg, duration=600.0, seed=4, channels=('gyro_x',),
                                       effects=fx).imu.channels['gyro_x']
             for fx in ([{'name': 'quantization', 'params': {
                 'step_rad': step, 'dither': dither, 'axis': 0.0}}], [])]

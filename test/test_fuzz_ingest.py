@@ -8,8 +8,10 @@ rosbags' deserializer must accept too, with the same stamp and values bit for bi
 import shutil
 
 from bag_factory import imu_msg, imu_recording, STORE2
-from gyro_char.ingest.cdr import decode_imu
-from gyro_char.recordings import IMU_CHANNELS, InputError, read_imu, write_bag
+from gyro_char.errors import InputError
+from gyro_char.io import read_imu, write_bag
+from gyro_char.io.cdr import decode_imu
+from gyro_char.records import IMU_CHANNELS
 from msg_adapters import imu_sample
 import numpy as np
 import pytest
@@ -170,7 +172,7 @@ def _check_against_rosbags(payloads, offsets, sizes, buf, decode=decode_imu, des
 def test_fuzz_scalar_blocks_match_rosbags():
     """Flip bytes in JointState blocks: an accepted block equals rosbags, message by message."""
     from bag_factory import joint_msg
-    from gyro_char.ingest.cdr_scalar import decode_scalar, JOINT_STATE
+    from gyro_char.io.cdr_scalar import decode_scalar, JOINT_STATE
     from msg_adapters import joint_angle
     rng = np.random.default_rng(31)
     accepted = 0
@@ -206,7 +208,7 @@ def test_fuzz_scalar_blocks_match_rosbags():
 
 def test_fuzz_ros1_payloads_match_rosbags():
     from bag_factory import STORE1
-    from gyro_char.ingest.ros1_imu import decode_imu_ros1
+    from gyro_char.io.ros1_imu import decode_imu_ros1
     rec = imu_recording(30, seed=6)
     rng = np.random.default_rng(6)
     seeds = []

@@ -4,10 +4,11 @@ import shutil
 
 from bag_factory import (imu_msg, imu_recording, joint_msg, STORE2, vector3_msg, write_ros1,
                          write_ros2)
-from gyro_char.ingest.bag_read import read_imu_bag
-from gyro_char.ingest.encoder_read import read_encoder_bag
-from gyro_char.recordings import (IMU_CHANNELS, InputError, read_encoder, read_imu, Recording,
-                                  write_bag)
+from gyro_char.errors import InputError
+from gyro_char.io import read_encoder, read_imu, write_bag
+from gyro_char.io.bag_read import read_imu_bag
+from gyro_char.io.encoder_read import read_encoder_bag
+from gyro_char.records import IMU_CHANNELS, Recording
 import numpy as np
 import pytest
 
@@ -215,7 +216,7 @@ def test_malformed_joint_states_counted_alike_by_both_paths(tmp_path, storage):
 def test_one_rule_for_malformed_messages():
     from types import SimpleNamespace as Ns
 
-    from gyro_char.ingest.encoder_read import _Samples
+    from gyro_char.io.encoder_read import _Samples
     from msg_adapters import joint_angle
     stamp = Ns(sec=5, nanosec=0)
 

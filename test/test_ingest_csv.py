@@ -2,9 +2,10 @@
 import gzip
 import math
 
-from gyro_char.ingest.csv_io import G0
-from gyro_char.ingest.sanitize import segments
-from gyro_char.recordings import InputError, read_encoder, read_imu
+from gyro_char.errors import InputError
+from gyro_char.io import read_encoder, read_imu
+from gyro_char.io.csv_io import G0
+from gyro_char.io.sanitize import segments
 import numpy as np
 import pytest
 

@@ -10,13 +10,14 @@ from pathlib import Path
 import shutil
 import struct
 
-from gyro_char.ingest import mcap_scan
-from gyro_char.ingest.bag_read import read_imu_bag
-from gyro_char.ingest.bag_write import (IMU_TYPE, joint_state_encoder, JOINT_TYPE, stamps_ns,
-                                        typestore)
-from gyro_char.ingest.cdr import encode_imu
-from gyro_char.ingest.encoder_read import read_encoder_bag
-from gyro_char.recordings import ENCODER_CHANNEL, IMU_CHANNELS, Recording, write_bag
+from gyro_char.io import mcap_scan
+from gyro_char.io import write_bag
+from gyro_char.io.bag_read import read_imu_bag
+from gyro_char.io.bag_write import IMU_TYPE, joint_state_encoder, JOINT_TYPE, stamps_ns
+from gyro_char.io.cdr import encode_imu
+from gyro_char.io.encoder_read import read_encoder_bag
+from gyro_char.io.typestore import typestore
+from gyro_char.records import ENCODER_CHANNEL, IMU_CHANNELS, Recording
 import numpy as np
 import pytest
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer

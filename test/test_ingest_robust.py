@@ -5,7 +5,9 @@ import shutil
 
 from bag_factory import imu_msg, imu_recording, STORE2, write_ros2
 from gyro_char import cli
-from gyro_char.recordings import IMU_CHANNELS, InputError, read_imu, Recording, write_bag
+from gyro_char.errors import InputError
+from gyro_char.io import read_imu, write_bag
+from gyro_char.records import IMU_CHANNELS, Recording
 import numpy as np
 import pytest
 

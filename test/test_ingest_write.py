@@ -3,9 +3,12 @@ from pathlib import Path
 import sqlite3
 
 from bag_factory import header_msg
-from gyro_char.ingest.bag_write import joint_state_encoder, merge_order, typestore
-from gyro_char.ingest.cdr import decode_imu, encode_imu, imu_size
-from gyro_char.recordings import (InputError, read_encoder, read_imu, Recording, write_bag)
+from gyro_char.errors import InputError
+from gyro_char.io import read_encoder, read_imu, write_bag
+from gyro_char.io.bag_write import joint_state_encoder, merge_order
+from gyro_char.io.cdr import decode_imu, encode_imu, imu_size
+from gyro_char.io.typestore import typestore
+from gyro_char.records import Recording
 from msg_adapters import fill_imu, imu_sample, joint_angle
 import numpy as np
 import pytest

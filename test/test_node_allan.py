@@ -7,11 +7,11 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-from gyro_char.allan_input import compute
-from gyro_char.bench_sim import simulate_static
-from gyro_char.checkpoint import load_checkpoint
+from gyro_char.allan.compute import compute
+from gyro_char.live.checkpoint import load_checkpoint
 from gyro_char.nodes.allan_node import AllanNode
-from gyro_char.nodes.node_common import LATCHED_1
+from gyro_char.nodes.common import LATCHED_1
+from gyro_char.sim.simulator import simulate_static
 from msg_adapters.diagnostics import parse_multiarray
 from node_harness import (
     DOMAINS, EPOCH, Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context,

@@ -1,10 +1,11 @@
 """AllanLive (what allan_node runs): equal to the batch path, resumable, bounded, honest."""
 import resource
 
-from gyro_char.allan_input import compute
-from gyro_char.allan_live import AllanLive
-from gyro_char.checkpoint import load_checkpoint, save_checkpoint
-from gyro_char.recordings import IMU_CHANNELS, InputError, Recording
+from gyro_char.allan.compute import compute
+from gyro_char.errors import InputError
+from gyro_char.live.allan_live import AllanLive
+from gyro_char.live.checkpoint import load_checkpoint, save_checkpoint
+from gyro_char.records import IMU_CHANNELS, Recording
 import numpy as np
 import pytest
 

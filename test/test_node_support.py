@@ -4,10 +4,10 @@ import subprocess
 import sys
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from gyro_char.checkpoint import load_checkpoint, PeriodicCheckpoint, save_checkpoint
-from gyro_char.motion_detect import MotionDetector
-from gyro_char.recordings import InputError
-from gyro_char.stream_health import ACCEPT, DROP, RESTART, stream_skew_s, StreamHealth
+from gyro_char.errors import InputError
+from gyro_char.live.checkpoint import load_checkpoint, PeriodicCheckpoint, save_checkpoint
+from gyro_char.live.motion_detect import MotionDetector
+from gyro_char.live.stream_health import ACCEPT, DROP, RESTART, stream_skew_s, StreamHealth
 from msg_adapters.diagnostics import (
     diagnostic_array, diagnostic_status, level_of, multiarray, parse_key_values,
     parse_multiarray, WARN)
@@ -164,7 +164,7 @@ def test_checkpoint_survives_kill_during_writes(tmp_path):
     path = tmp_path / 'ck.npz'
     code = (
         'import numpy as np, sys\n'
-        'from gyro_char.checkpoint import save_checkpoint\n'
+        'from gyro_char.live.checkpoint import save_checkpoint\n'
         'i = 0\n'
         'while True:\n'
         '    save_checkpoint(sys.argv[1], {"i": i, "x": np.full(200_000, float(i))})\n'

@@ -4,9 +4,9 @@ import sys
 import time
 from types import SimpleNamespace
 
-from gyro_char.bench_sim import simulate_swing
-from gyro_char.nodes.node_common import InvalidParameter
+from gyro_char.nodes.common import InvalidParameter
 from gyro_char.nodes.swing_kf_node import SwingKfNode
+from gyro_char.sim.simulator import simulate_swing
 from node_harness import (
     DOMAINS, EPOCH, Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context,
     ros_env, spin_until, stop)

@@ -1,10 +1,11 @@
 """IEEE 952 fit: exact on model curves, the L1 optimum, term selection, recovery on synthetics."""
-from gyro_char.allan_edf import chi2_interval
-from gyro_char.allan_input import compute
-from gyro_char.noise_fit import _L1Step, _objective, fit_l1, fit_noise, fit_result
-from gyro_char.noise_gen import generate
-from gyro_char.noise_model import design_matrix, model_avar, TERMS
-from gyro_char.recordings import Recording
+from gyro_char.allan.compute import compute
+from gyro_char.allan.edf import chi2_interval
+from gyro_char.allan.fit import fit_noise, fit_result
+from gyro_char.allan.model import design_matrix, model_avar, TERMS
+from gyro_char.allan.solvers import fit_l1, L1Step, objective
+from gyro_char.records import Recording
+from gyro_char.sim.noise_gen import generate
 import numpy as np
 import pytest
 from scipy import optimize
@@ -74,12 +75,12 @@ def test_warm_highs_step_matches_linprog():
     a_mat = design_matrix(TAU)
     for _ in range(3):
         avar = model_avar(TAU, TRUE) * np.exp(0.3 * rng.standard_normal(TAU.size))
-        warm = _L1Step(a_mat, avar)
-        cold = _L1Step(a_mat, avar)
+        warm = L1Step(a_mat, avar)
+        cold = L1Step(a_mat, avar)
         cold.highs = None
         z_w, z_c = fit_l1(a_mat, avar, step=warm), fit_l1(a_mat, avar, step=cold)
-        assert _objective(z_w, a_mat, np.log(avar)) == pytest.approx(
-            _objective(z_c, a_mat, np.log(avar)), rel=1e-9)
+        assert objective(z_w, a_mat, np.log(avar)) == pytest.approx(
+            objective(z_c, a_mat, np.log(avar)), rel=1e-9)
 
 
 @pytest.mark.parametrize('method', ['l1', 'l1w', 'weighted'])
@@ -123,7 +124,7 @@ def test_selection_drops_absent_terms(truth):
 
 @pytest.fixture(scope='module')
 def adis_session1(adis_records):
-    from gyro_char.recordings import read_imu
+    from gyro_char.io import read_imu
     rec = read_imu(str(adis_records[0]), quiet=True)
     return compute(rec, ['gyro_x', 'gyro_y', 'gyro_z'])
 

@@ -1,7 +1,7 @@
 """Synthetic noise generator: each IEEE term against its closed-form Allan variance."""
-from gyro_char.allan import overlapping_avar
-from gyro_char.noise_gen import expected_avar, generate
-from gyro_char.noise_model import model_avar
+from gyro_char.allan.kernel import overlapping_avar
+from gyro_char.allan.model import model_avar
+from gyro_char.sim.noise_gen import expected_avar, generate
 import numpy as np
 import pytest
 

@@ -1,10 +1,10 @@
 """Bench simulator API: presets, YAML overrides, reproducibility, truth contract, bad input."""
 import math
 
-from gyro_char.bench_sim import simulate_static, simulate_swing
-from gyro_char.presets import PRESETS
-from gyro_char.recordings import InputError
-from gyro_char.sim_config import BenchConfig, load
+from gyro_char.errors import InputError
+from gyro_char.sim.config import BenchConfig, load
+from gyro_char.sim.presets import PRESETS
+from gyro_char.sim.simulator import simulate_static, simulate_swing
 import numpy as np
 import pytest
 

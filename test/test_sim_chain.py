@@ -1,11 +1,10 @@
 """Each element of the paper's bench model against its closed form."""
 import math
 
-from gyro_char.bench_sim import simulate_static, simulate_swing
-from gyro_char.sim_chain import (
-    encoder_reading, G0, quantize, sample_times, specific_force, stand_angle_clean,
-    stand_motion)
-from gyro_char.sim_config import BenchConfig, EncoderConfig, noiseless, StandConfig
+from gyro_char.sim.chain import (encoder_reading, G0, quantize, sample_times, specific_force,
+                                 stand_angle_clean, stand_motion)
+from gyro_char.sim.config import BenchConfig, EncoderConfig, noiseless, StandConfig
+from gyro_char.sim.simulator import simulate_static, simulate_swing
 import numpy as np
 import pytest
 

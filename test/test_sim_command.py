@@ -1,10 +1,10 @@
 """``gyro-char simulate``: a real ROS 2 bag + truth.json, reproducible by seed."""
 import json
 
-from gyro_char.bench_sim import simulate_swing
 from gyro_char.cli import main
-from gyro_char.recordings import read_encoder, read_imu
-from gyro_char.sim_config import load
+from gyro_char.io import read_encoder, read_imu
+from gyro_char.sim.config import load
+from gyro_char.sim.simulator import simulate_swing
 import numpy as np
 import pytest
 

@@ -58,8 +58,8 @@ def test_demo_tables_offline_and_live(tmp_path, capsys, monkeypatch):
 
 def test_allan_vs_truth_plot(tmp_path):
     allantools = pytest.importorskip('allantools')
-    from gyro_char.bench_sim import simulate_static
-    from gyro_char.report.sim import plot_allan_vs_truth
+    from gyro_char.report.sim_plot import plot_allan_vs_truth
+    from gyro_char.sim.simulator import simulate_static
     run = simulate_static('adis16405', duration=300.0, seed=1, channels=['gyro_x', 'gyro_y'])
     channels = {}
     for name in ('gyro_x', 'gyro_y'):

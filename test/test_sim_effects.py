@@ -1,12 +1,12 @@
 """Each catalogue effect's signature against theory (Allan, spectrum or swing residual)."""
 import math
 
-from gyro_char.bench_sim import simulate_static, simulate_swing
-from gyro_char.effects import build_effects, EFFECTS, parse_effect
-from gyro_char.effects_sensor import bartlett_kernel, InternalLowpass
-from gyro_char.recordings import InputError
-from gyro_char.sim_chain import G0, stand_angle_clean, stand_motion
-from gyro_char.sim_config import BenchConfig, noiseless
+from gyro_char.errors import InputError
+from gyro_char.sim.chain import G0, stand_angle_clean, stand_motion
+from gyro_char.sim.config import BenchConfig, noiseless
+from gyro_char.sim.effects import build_effects, EFFECTS, parse_effect
+from gyro_char.sim.effects.sensor import bartlett_kernel, InternalLowpass
+from gyro_char.sim.simulator import simulate_static, simulate_swing
 import numpy as np
 import pytest
 

@@ -1,13 +1,13 @@
 # Gaps in the gyro stamps (dropped best-effort messages, stalls) in the live swing filter: the
 # motion during a gap is unknown, so the integrated gyro angle after it carries an unknown
 # offset. The filter must release that offset (and count the gap), not integrate across it.
-from gyro_char.bench_sim import simulate_swing
-from gyro_char.recordings import ENCODER_CHANNEL, Recording
-from gyro_char.swing_batch import GAP_RELEASE_FACTOR
-from gyro_char.swing_kf import estimate_swing
-from gyro_char.swing_mc import study_config
-from gyro_char.swing_model import SwingNoise
-from gyro_char.swing_online import SwingOnline
+from gyro_char.live.swing_online import SwingOnline
+from gyro_char.records import ENCODER_CHANNEL, Recording
+from gyro_char.sim.monte_carlo import study_config
+from gyro_char.sim.simulator import simulate_swing
+from gyro_char.swing.batch import GAP_RELEASE_FACTOR
+from gyro_char.swing.filter import estimate_swing
+from gyro_char.swing.model import SwingNoise
 import numpy as np
 import pytest
 

@@ -3,8 +3,9 @@
 import json
 
 from gyro_char.cli import main
-from gyro_char.recordings import InputError, Recording
-from gyro_char.swing_kf import estimate_swing
+from gyro_char.errors import InputError
+from gyro_char.records import Recording
+from gyro_char.swing.filter import estimate_swing
 import numpy as np
 import pytest
 from test_swing_kf import make_run, T, TRUTH

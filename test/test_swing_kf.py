@@ -5,12 +5,12 @@
 from pathlib import Path
 import sys
 
-from gyro_char import swing_batch
-from gyro_char.recordings import Recording
-from gyro_char.swing_align import integrate
-from gyro_char.swing_kf import estimate_swing, SwingKalman
-from gyro_char.swing_model import SwingNoise, transition
-from gyro_char.swing_online import SwingOnline
+from gyro_char.live.swing_online import SwingOnline
+from gyro_char.records import Recording
+from gyro_char.swing import batch as swing_batch
+from gyro_char.swing.align import integrate
+from gyro_char.swing.filter import estimate_swing, SwingKalman
+from gyro_char.swing.model import SwingNoise, transition
 import numpy as np
 import pytest
 

@@ -3,12 +3,13 @@
 # Monte Carlo method-error study of bench/mc_swing.py.
 import json
 
-from gyro_char.bench_sim import simulate_swing
 from gyro_char.cli import main
-from gyro_char.recordings import read_imu, Recording, write_bag
-from gyro_char.swing_kf import estimate_swing
-from gyro_char.swing_mc import monte_carlo, study_config
-from gyro_char.swing_online import SwingOnline
+from gyro_char.io import read_imu, write_bag
+from gyro_char.live.swing_online import SwingOnline
+from gyro_char.records import Recording
+from gyro_char.sim.monte_carlo import monte_carlo, study_config
+from gyro_char.sim.simulator import simulate_swing
+from gyro_char.swing.filter import estimate_swing
 import numpy as np
 import pytest
 

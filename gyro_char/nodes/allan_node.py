@@ -17,16 +17,17 @@ import time
 from typing import Any, Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from gyro_char.allan_live import AllanLive, return_freed_memory
-from gyro_char.checkpoint import load_checkpoint, PeriodicCheckpoint
-from gyro_char.nodes.node_common import (
-    declare, LATCHED_1, Param, publish_input_health, RELIABLE_10, run_node, sensor_qos,
-    split_at_markers, validate)
-from gyro_char.recordings import IMU_CHANNELS, InputError
-from gyro_char.stream_health import DROP, RESTART, StreamHealth
+from gyro_char.errors import InputError
+from gyro_char.live.allan_live import AllanLive, return_freed_memory
+from gyro_char.live.checkpoint import load_checkpoint, PeriodicCheckpoint
+from gyro_char.live.status import InputStatus
+from gyro_char.live.stream_health import DROP, RESTART, StreamHealth
+from gyro_char.nodes.common import (declare, LATCHED_1, Param, publish_input_health, RELIABLE_10,
+                                    run_node, sensor_qos, split_at_markers, validate)
+from gyro_char.records import IMU_CHANNELS
 from msg_adapters import imu_sample
 from msg_adapters.diagnostics import (
-    diagnostic_array, diagnostic_status, ERROR, multiarray, OK, WARN)
+    diagnostic_array, diagnostic_status, ERROR, multiarray, OK)
 import numpy as np
 from rclpy.node import Node
 from sensor_msgs.msg import Imu
@@ -35,7 +36,7 @@ from std_srvs.srv import Trigger
 
 NAME = 'allan_node'
 CURVE_QUANTITIES = ('tau_s', 'adev', 'adev_lo', 'adev_hi')
-# Key suffixes of the SI units of noise.json (DESIGN.md section 4), gyro then accel.
+# Key suffixes of the SI units of noise.json (docs/design.md), gyro then accel.
 UNIT_KEYS = {
     'gyro': {'N': 'rad_sqrt_s', 'B': 'rad_s', 'K': 'rad_s_sqrt_s', 'Q': 'rad', 'R': 'rad_s2'},
     'accel': {'N': 'm_s_sqrt_s', 'B': 'm_s2', 'K': 'm_s2_sqrt_s', 'Q': 'm_s', 'R': 'm_s3'},
@@ -58,7 +59,7 @@ PARAMS = [
     Param('checkpoint_period_s', 60.0, 'seconds between checkpoints (at most this much data '
           'is lost on a crash)', low=0.1, high=86400.0),
     Param('output_dir', '', 'if set, ~/compute also writes the files of gyro-char allan here'),
-    Param('fit_method', 'l1', 'noise fit estimator', choices=('l1', 'weighted', 'l1-raw')),
+    Param('fit_method', 'l1', 'noise fit estimator', choices=('l1', 'l1w', 'weighted')),
     Param('fit_bootstrap', 50, 'bootstrap curves for the 68 % intervals of the fit', low=2,
           high=1000),
     Param('fit_tau_min_s', 0.0, 'fit only tau >= this (s); 0 = all', low=0.0, high=1e6),
@@ -95,7 +96,7 @@ class AllanNode(Node):
                     'mean_sigmas': p['motion_mean_sigmas']})
         self.health = StreamHealth('imu', frame_id=p['frame_id'], max_rate_hz=p['max_rate_hz'])
         self._q: deque = deque()
-        self._last_diag: Dict[str, Any] = {}
+        self.status = InputStatus()
         self._fit_thread: Optional[threading.Thread] = None
         self._fit_lock = threading.Lock()
         self.fit_status = 'no fit yet'
@@ -226,8 +227,8 @@ class AllanNode(Node):
                            ('tau_index', None)])
 
     def fit(self, res) -> Dict[str, Any]:
-        """Fit every channel (``noise_fit.fit_result``); a failing channel is reported."""
-        from gyro_char.noise_fit import fit_result
+        """Fit every channel (``allan.fit.fit_result``); a failing channel is reported."""
+        from gyro_char.allan.fit import fit_result
         fits, failed = {}, {}
         for c, name in enumerate(res.channels):
             one = replace(res, avar=res.avar[:, [c]], edf=res.edf[:, [c]],
@@ -279,7 +280,7 @@ class AllanNode(Node):
             status = f'fit of {res.n_samples} samples done in {time.monotonic() - started:.1f} s'
             out = self.p['output_dir']
             if out and not fitted['failed']:
-                from gyro_char.commands.allan import write_outputs
+                from gyro_char.report.allan_outputs import write_outputs
                 write_outputs(out, res, fitted['fits'], self.p['imu_topic'],
                               title=f'{NAME}: {res.n_samples} samples at '
                                     f'{1.0 / res.dt:.6g} Hz, fit {self.p["fit_method"]}')
@@ -296,41 +297,31 @@ class AllanNode(Node):
 
     def health_status(self) -> tuple:
         """Return (level, message, values) for /diagnostics."""
-        now = time.time()
-        problems = self.health.problems(now, self.p['stall_timeout_s'],
-                                        self._last_diag.get('health'))
-        self._last_diag['health'] = self.health.as_dict()
-        values: Dict[str, Any] = dict(self._last_diag['health'])
+        st = self.status.begin()
+        st.streams([self.health], time.time(), self.p['stall_timeout_s'])
         summary = self.live.summary()
-        values.update(summary)
-        level = WARN if problems else OK
+        st.values.update(summary)
         if summary.get('motion_events'):
-            level = WARN
-            problems.append(f'motion detected {summary["motion_events"]} times (last '
-                            f'{summary["motion_last_start_s"]:.3f}..'
-                            f'{summary["motion_last_end_s"]:.3f} s): not a static record')
-        if self.live.off_rate_samples > self._last_diag.get('off_rate', 0):
-            level = WARN
-            problems.append(f'rate changed to {self.live.off_rate_hz:.6g} Hz: those samples are '
-                            'not accumulated (call ~/reset to restart at the new rate)')
-        self._last_diag['off_rate'] = self.live.off_rate_samples
-        new_gaps = self.live.gaps - self._last_diag.get('gaps', 0)
+            st.warn(f'motion detected {summary["motion_events"]} times (last '
+                    f'{summary["motion_last_start_s"]:.3f}..'
+                    f'{summary["motion_last_end_s"]:.3f} s): not a static record')
+        if st.grew('off_rate', self.live.off_rate_samples) > 0:
+            st.warn(f'rate changed to {self.live.off_rate_hz:.6g} Hz: those samples are '
+                    'not accumulated (call ~/reset to restart at the new rate)')
+        new_gaps = st.grew('gaps', self.live.gaps)
         if new_gaps > 0:
-            level = WARN
-            problems.append(f'{new_gaps} new stamp gaps (segments pooled, see gap_time_s)')
-        self._last_diag['gaps'] = self.live.gaps
-        values['resumed_samples'] = self.resumed_samples
-        values['processing_errors'] = self.processing_errors
-        values['checkpoint_errors'] = self.checkpoint_errors
+            st.warn(f'{new_gaps} new stamp gaps (segments pooled, see gap_time_s)')
+        st.values['resumed_samples'] = self.resumed_samples
+        st.values['processing_errors'] = self.processing_errors
+        st.values['checkpoint_errors'] = self.checkpoint_errors
         if self.checkpoint is not None:
-            values['checkpoint_writes'] = self.checkpoint.writes
+            st.values['checkpoint_writes'] = self.checkpoint.writes
             age = self.checkpoint.age_s()
-            values['checkpoint_age_s'] = math.nan if age is None else age
+            st.values['checkpoint_age_s'] = math.nan if age is None else age
         if self.processing_errors or self.checkpoint_errors:
-            level = ERROR
-            problems.append('processing/checkpoint errors (see log)')
-        values['fit_status'] = self.fit_status
-        return level, '; '.join(problems) if problems else 'ok', values
+            st.error('processing/checkpoint errors (see log)')
+        st.values['fit_status'] = self.fit_status
+        return st.result()
 
     def publish_diagnostics(self) -> None:
         """Publish the input health, accumulation state and motion on /diagnostics."""
@@ -340,7 +331,7 @@ class AllanNode(Node):
         self._q.clear()
         self.live.reset()
         self.health.reset()
-        self._last_diag = {}
+        self.status.reset()
         self.resumed_samples = 0
         if self.checkpoint is not None:
             self.write_checkpoint()

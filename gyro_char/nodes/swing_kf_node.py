@@ -12,14 +12,14 @@ import time
 from typing import Any, Dict, List
 
 from diagnostic_msgs.msg import DiagnosticArray
-from gyro_char.nodes.node_common import (
-    declare, Param, publish_input_health, publish_status, RELIABLE_10, run_node, sensor_qos,
-    split_at_markers, validate)
-from gyro_char.stream_health import DROP, RESTART, stream_skew_s, StreamHealth
-from gyro_char.swing_model import SwingNoise
-from gyro_char.swing_online import SwingOnline
+from gyro_char.live.status import InputStatus
+from gyro_char.live.stream_health import DROP, RESTART, stream_skew_s, StreamHealth
+from gyro_char.live.swing_online import SwingOnline
+from gyro_char.nodes.common import (declare, Param, publish_input_health, publish_status,
+                                    RELIABLE_10, run_node, sensor_qos, split_at_markers, validate)
+from gyro_char.swing.model import SwingNoise
 from msg_adapters import joint_angle, stamp_seconds
-from msg_adapters.diagnostics import ERROR, OK, WARN
+from msg_adapters.diagnostics import OK, WARN
 import numpy as np
 from rclpy.node import Node
 from sensor_msgs.msg import Imu, JointState
@@ -78,7 +78,7 @@ class SwingKfNode(Node):
         self.processing_errors = 0
         self._converged = False
         self._fed_last: Dict[str, float] = {}
-        self._last_diag: Dict[str, Dict] = {}
+        self.status = InputStatus()
         self._configure()
         depth = self.p['input_queue_depth']
         self.create_subscription(Imu, self.p['imu_topic'], self._on_imu, sensor_qos(depth))
@@ -227,35 +227,27 @@ class SwingKfNode(Node):
 
     def health_status(self) -> tuple:
         """Return (level, message, values) of the input health."""
-        now = time.time()
-        problems = []
-        values: Dict[str, Any] = {}
-        for h in (self.imu_health, self.enc_health):
-            problems += h.problems(now, self.p['stall_timeout_s'], self._last_diag.get(h.name))
-            self._last_diag[h.name] = h.as_dict()
-            values.update(self._last_diag[h.name])
+        st = self.status.begin()
+        st.streams([self.imu_health, self.enc_health], time.time(), self.p['stall_timeout_s'])
         skew = stream_skew_s(self.imu_health, self.enc_health)
         if skew is not None:
-            values['stream_skew_s'] = skew
+            st.values['stream_skew_s'] = skew
             if abs(skew) > self.p['max_skew_s']:
-                problems.append(f'streams {skew:+.3f} s apart in time')
-        grew = self.missing_joint - self._last_diag.get('missing_joint', 0)
-        self._last_diag['missing_joint'] = self.missing_joint
+                st.warn(f'streams {skew:+.3f} s apart in time')
+        grew = st.grew('missing_joint', self.missing_joint)
         if grew:
-            problems.append(f'{grew} JointState messages without joint {self._joint!r}')
-        values['encoder_dropped_missing_joint'] = self.missing_joint
+            st.warn(f'{grew} JointState messages without joint {self._joint!r}')
+        st.values['encoder_dropped_missing_joint'] = self.missing_joint
         # Gyro gaps of 3+ samples: bridged by releasing the integrated angle's offset (core).
-        values['imu_gaps_bridged'] = self.core.gaps_released
-        values['filter_restarts'] = self.core_restarts
-        values['processing_errors'] = self.processing_errors
-        values['converged'] = self._converged
+        st.values['imu_gaps_bridged'] = self.core.gaps_released
+        st.values['filter_restarts'] = self.core_restarts
+        st.values['processing_errors'] = self.processing_errors
+        st.values['converged'] = self._converged
         if not self._converged:
-            problems.append('filter not converged')
-        level = WARN if problems else OK
+            st.warn('filter not converged')
         if self.processing_errors:
-            level = ERROR
-            problems.append(f'{self.processing_errors} chunks failed in the filter (see log)')
-        return level, '; '.join(problems) if problems else 'ok', values
+            st.error(f'{self.processing_errors} chunks failed in the filter (see log)')
+        return st.result()
 
     def publish_diagnostics(self) -> None:
         """Publish the input health and convergence on ``/diagnostics``."""
@@ -268,7 +260,7 @@ class SwingKfNode(Node):
             h.reset()
         self._fed_last = {}
         self.missing_joint = 0
-        self._last_diag = {}
+        self.status.reset()
         self._configure()
         self._converged = False
         response.success = True

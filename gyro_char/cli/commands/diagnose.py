@@ -1,0 +1,286 @@
+"""
+``gyro-char diagnose --kind KIND INPUT...``: where the sim-to-real gap lies and what explains it.
+
+Fits the paper's baseline model to each gyro channel of the input record(s), compares them with
+repeated simulated twins on a battery of observables, ranks the catalogue effects and adds them
+greedily (``gyro_char.diagnosis.engine``). Writes ``diagnosis.json`` (docs/design.md: the channel
+with the largest baseline gap at the top level, every channel under the extra ``per_channel``
+field) and ``diagnosis_<channel>.png`` in ``--out``. ``--holdout INPUT`` re-measures, on a
+record the fit never saw, the gap of the baseline and of the baseline + the selected effects
+with their parameters fixed (only the baseline's white-noise level is refitted).
+``--kind swing`` diagnoses one or several swing records of one gyro (IMU + encoder each;
+``--period`` once for all, once per record, or the encoder's dominant period) against twins of
+the paper's swing model (``gyro_char.diagnosis.swing``): the effect parameters and the gyro's one
+scale-factor error are shared by the records, bias, drift and noise stay per record; the extra
+field ``per_record`` lists each record's own Kalman scale-factor estimate against its amplitude
+and period. ``--holdout`` then re-measures a withheld swing record with the effect parameters
+and the pooled scale factor frozen (its bias, drift and noise levels refitted).
+"""
+import json
+import os
+import sys
+
+from gyro_char.cli import add_common
+from gyro_char.errors import InputError
+from gyro_char.io import read_imu
+from gyro_char.records import GYRO_CHANNELS
+import numpy as np
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        'diagnose', help='sim-to-real gap: where it lies, which unmodelled effects explain it',
+        description=__doc__.strip().splitlines()[0])
+    p.add_argument('--kind', choices=('static', 'swing'), required=True)
+    p.add_argument('inputs', metavar='INPUT', nargs='+',
+                   help='bag directory, .mcap, ROS 1 .bag or CSV (same sensor, same rate)')
+    p.add_argument('--channels', default=None,
+                   help='comma-separated gyro channels (default: every gyro channel present)')
+    p.add_argument('--holdout', default=None, metavar='INPUT',
+                   help='record withheld from the fit, to check the selected model on')
+    p.add_argument('--repeats', type=int, default=8,
+                   help='simulated twins per model (the sim scatter; default 8)')
+    p.add_argument('--max-samples', type=int, default=2 ** 17,
+                   help='analyse the first N samples of each record (default 131072)')
+    p.add_argument('--seed', type=int, default=1)
+    p.add_argument('--topic', default=None, help='sensor_msgs/Imu topic (bags)')
+    p.add_argument('--period', default=None, metavar='SECONDS[,SECONDS...]',
+                   help='swing: the swing period, once for all records or comma-separated '
+                        'once per record (default: the dominant period of the encoder of each '
+                        'record)')
+    p.add_argument('--axis', default=None,
+                   help='swing: gyro axis along the swing axis (default: the one that swings)')
+    p.add_argument('--encoder-topic', default=None,
+                   help='swing: sensor_msgs/JointState topic of the stand encoder (bags)')
+    add_common(p, default_out='diagnose_out')
+    p.set_defaults(func=run)
+
+
+def _channels(recs, wanted):
+    present = [c for c in GYRO_CHANNELS if all(c in r.channels for r in recs)]
+    if wanted:
+        chosen = [c.strip() for c in wanted.split(',') if c.strip()]
+        bad = [c for c in chosen if c not in present]
+        if bad:
+            raise InputError(f'channel(s) {bad} not in every input; present: {present}')
+        return chosen
+    if not present:
+        raise InputError('no gyro channel present in every input')
+    return present
+
+
+def _dt(rec) -> float:
+    dt = rec.dt
+    d = rec.t[1:] - rec.t[:-1]
+    if abs(d.max() - dt) > 0.1 * dt or abs(d.min() - dt) > 0.1 * dt:
+        raise InputError(f'{rec.source}: sample interval varies by more than 10 % '
+                         f'({d.min():.6g}..{d.max():.6g} s); the static diagnosis needs '
+                         'uniform sampling')
+    return dt
+
+
+def run(args) -> int:
+    from gyro_char.diagnosis import engine as diagnose, static as diag_static
+    from gyro_char.report.diagnosis_plot import plot_diagnosis
+
+    if args.repeats < 4:
+        raise InputError('--repeats must be >= 4 (the gap is judged against their scatter)')
+    if args.kind == 'swing':
+        return run_swing(args)
+    recs = [read_imu(p, topic=args.topic, quiet=args.quiet) for p in args.inputs]
+    dts = [_dt(r) for r in recs]
+    if max(dts) - min(dts) > 1e-6 * max(dts):
+        raise InputError(f'inputs have different sample intervals: {dts}')
+    hold = read_imu(args.holdout, topic=args.topic, quiet=args.quiet) if args.holdout else None
+    if hold is not None and abs(_dt(hold) - dts[0]) > 1e-6 * dts[0]:
+        raise InputError('the holdout record has another sample interval')
+    for r in recs + ([hold] if hold is not None else []):
+        for note in r.notes:
+            print(f'note: {r.source}: {note}', file=sys.stderr)
+    os.makedirs(args.out, exist_ok=True)
+    per = {}
+    for ch in _channels(recs + ([hold] if hold is not None else []), args.channels):
+        problem = diag_static.static_problem([r.channels[ch] for r in recs], dts[0],
+                                             channel=ch, max_samples=args.max_samples)
+        diag = diagnose.run(problem, repeats=args.repeats, seed=args.seed, quiet=args.quiet)
+        out = diag.to_json()
+        out['channel'] = ch
+        if hold is not None:
+            out['holdout'] = holdout_check(diag, hold.channels[ch], dts[0], ch, args)
+        png = os.path.join(args.out, f'diagnosis_{ch}.png')
+        plot_diagnosis(diag, problem.ranges[0], png, title=f'{ch}: sim-to-real gap')
+        per[ch] = out
+        print(summary(ch, out))
+    top = max(per, key=lambda c: per[c]['baseline_gap'])
+    result = dict(per[top])
+    result['per_channel'] = per
+    with open(os.path.join(args.out, 'diagnosis.json'), 'w') as fh:
+        json.dump(result, fh, indent=2)
+    print(f'wrote {args.out}/diagnosis.json and {len(per)} plot(s)')
+    return 0
+
+
+def _swing_record(path, period, args):
+    """IMU, encoder and swing period of one swing input."""
+    from gyro_char.io import read_encoder
+    from gyro_char.swing.align import dominant_period
+
+    imu = read_imu(path, topic=args.topic, quiet=args.quiet)
+    enc = read_encoder(path, topic=args.encoder_topic, quiet=args.quiet)
+    for r in (imu, enc):
+        for note in r.notes:
+            print(f'note: {r.source}: {note}', file=sys.stderr)
+    if period is None:
+        if len(enc) < 16:
+            raise InputError(f'{path}: no encoder samples to find the swing period from; '
+                             'give --period')
+        period = dominant_period(enc.t - enc.t[0], enc.channels['encoder'])
+        print(f'note: {path}: swing period {period:.4g} s (dominant period of the encoder)',
+              file=sys.stderr)
+    return imu, enc, float(period)
+
+
+def _swing_periods(args) -> list:
+    n = len(args.inputs)
+    if args.period is None:
+        return [None] * n
+    try:
+        periods = [float(v) for v in args.period.split(',') if v.strip()]
+    except ValueError:
+        raise InputError(f'--period: not a number or comma-separated numbers: '
+                         f'{args.period!r}') from None
+    if not periods or not all(0 < v < float('inf') for v in periods):
+        raise InputError(f'--period must be positive seconds: {args.period!r}')
+    if len(periods) == 1:
+        return periods * n
+    if len(periods) != n:
+        raise InputError(f'--period takes one value for all records or one per record '
+                         f'({n}); got {len(periods)}')
+    return periods
+
+
+def run_swing(args) -> int:
+    """``--kind swing``: swing records (IMU + encoder) of one gyro against their twins."""
+    from dataclasses import replace
+
+    from gyro_char.diagnosis import engine as diagnose, swing as diag_swing
+    from gyro_char.report.diagnosis_plot import plot_diagnosis
+
+    periods = _swing_periods(args)
+    records = [_swing_record(p, per, args) for p, per in zip(args.inputs, periods)]
+    hold = None
+    if args.holdout:
+        # A single --period is the stand's for every run; per-record periods leave the
+        # held-out run's to its encoder.
+        once = periods[0] if args.period and ',' not in args.period else None
+        hold = _swing_record(args.holdout, once, args)
+    problem = diag_swing.swing_records_problem(records, axis=args.axis,
+                                               max_samples=args.max_samples)
+    diag = diagnose.run(problem, repeats=args.repeats, seed=args.seed, quiet=args.quiet)
+    out = diag.to_json()
+    bases = problem.context
+    ch = f'gyro_{bases[0].axis}'
+    out['channel'] = ch
+    out['per_record'] = per_record(args.inputs, bases)
+    if hold is not None:
+        out['holdout'] = swing_holdout_check(diag, hold, bases, args)
+    os.makedirs(args.out, exist_ok=True)
+    pngs = []
+    for i, b in enumerate(bases):
+        # One figure per record: the engine's plot shows its first record.
+        view = replace(diag, reals=[diag.reals[i]], evaluations={
+            k: replace(ev, stats=[ev.stats[i]]) for k, ev in diag.evaluations.items()})
+        pngs.append(f'diagnosis_{ch}.png' if i == 0 else f'diagnosis_{ch}_record{i + 1}.png')
+        plot_diagnosis(view, problem.ranges[i], os.path.join(args.out, pngs[-1]),
+                       title=f'{ch}: swing sim-to-real gap, record {i + 1} (period '
+                             f'{b.period_s:.4g} s, amplitude {b.amplitude:.3g} rad)')
+    with open(os.path.join(args.out, 'diagnosis.json'), 'w') as fh:
+        json.dump(out, fh, indent=2)
+    print(summary(ch, out))
+    print(f'wrote {args.out}/diagnosis.json and {", ".join(pngs)}')
+    return 0
+
+
+def per_record(sources, bases) -> list:
+    """Each record's own Kalman scale-factor estimate against its amplitude and period."""
+    return [{'source': str(src), 'period_s': b.period_s, 'amplitude_rad': b.amplitude,
+             'peak_rate_rad_s': b.peak_rate,
+             'kalman_scale_factor_error': b.record_scale_factor_error,
+             'kalman_scale_factor_sigma': b.record_scale_factor_sigma,
+             'twin_scale_factor_error': b.scale_factor_error}
+            for src, b in zip(sources, bases)]
+
+
+def swing_holdout_check(diag, hold, bases, args) -> dict:
+    """
+    Gap of the baseline and of the selected model on a swing record the fit never saw.
+
+    The effect parameters and the pooled scale-factor error are frozen; the record's own bias,
+    drift, noise levels, amplitude and period are refitted (they change from run to run).
+    """
+    from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing
+    from gyro_char.diagnosis.engine import excess_gap
+    from gyro_char.diagnosis.fit import GapObjective
+
+    imu, enc, period = hold
+    problem = diag_swing.swing_records_problem(
+        [(imu, enc, period)], axis=bases[0].axis, max_samples=args.max_samples,
+        scale_factor=bases[0].scale_factor_error)
+    seeds = [args.seed * 1000 + 500 + k for k in range(args.repeats)]
+    objective = GapObjective(problem.reals, problem.simulate, seeds)
+    base = objective.evaluate([])
+    objective.set_reference(base)
+    final = objective.evaluate(list(diag.model))
+    null = diag_gap.null_gaps(base.stats)
+    b = problem.context[0]
+    return {'baseline_gap': base.gap, 'final_gap': final.gap,
+            'null_gap_q95': float(np.quantile(null, 0.95)),
+            'baseline_excess': excess_gap(base.gap, null),
+            'final_excess': excess_gap(final.gap, null),
+            'effects': [{'name': n, 'params': p} for n, p in diag.model],
+            'record': {'period_s': b.period_s, 'amplitude_rad': b.amplitude,
+                       'kalman_scale_factor_error': b.record_scale_factor_error},
+            'note': 'effect parameters and the pooled scale-factor error fixed from the fit; '
+                    'bias, drift and noise levels of the record are refitted'}
+
+
+def holdout_check(diag, x, dt, channel, args) -> dict:
+    """Gap of the baseline and of the selected model on a record the fit never saw."""
+    from gyro_char.diagnosis import static as diag_static
+    from gyro_char.diagnosis.fit import fit_effect, GapObjective
+
+    problem = diag_static.static_problem([x], dt, channel=channel,
+                                         max_samples=args.max_samples)
+    seeds = [args.seed * 1000 + 500 + k for k in range(args.repeats)]
+    objective = GapObjective(problem.reals, problem.simulate, seeds)
+    effects = [(n, p) for n, p in diag.model if n != diag_static.NUISANCE]
+    _, base = fit_effect(objective, [], problem.nuisance)
+    objective.set_reference(base)
+    _, final = fit_effect(objective, effects, problem.nuisance)
+    return {'baseline_gap': base.gap, 'final_gap': final.gap,
+            'effects': [{'name': n, 'params': p} for n, p in effects],
+            'note': 'effect parameters fixed from the fit; only the baseline white-noise '
+                    'level is refitted on this record'}
+
+
+def summary(channel: str, out: dict) -> str:
+    lines = [f'{channel}: baseline gap {out["baseline_gap"]:.2f} (sim vs itself: '
+             f'{out["null_gap"]["mean"]:.2f}, 95 % {out["null_gap"]["q95"]:.2f})']
+    for w in out['where'][:4]:
+        lines.append(f'  gap in {w["observable"]} over {w["range"][0]:.4g}-{w["range"][1]:.4g} '
+                     f'{w["range_unit"]}: {w["excess"]:+.1f} sigma')
+    for s in out['steps']:
+        lines.append(f'  + {s["effect"]} {s["params"]} -> gap {s["gap_after"]:.2f}')
+    for a in out['ambiguous']:
+        lines.append(f'  ambiguous: {" / ".join(a["effects"])}; separating run: '
+                     f'{a["separating_run"]}')
+    for i, r in enumerate(out.get('per_record', [])):
+        lines.append(f'  record {i + 1}: period {r["period_s"]:.4g} s, amplitude '
+                     f'{r["amplitude_rad"]:.4g} rad, peak rate {r["peak_rate_rad_s"]:.4g} rad/s: '
+                     f'Kalman scale-factor error {r["kalman_scale_factor_error"]:+.3e} '
+                     f'+- {r["kalman_scale_factor_sigma"]:.1e}')
+    if 'holdout' in out:
+        h = out['holdout']
+        lines.append(f'  held-out record: baseline gap {h["baseline_gap"]:.2f} -> '
+                     f'{h["final_gap"]:.2f} with the selected effects')
+    return '\n'.join(lines)

@@ -1,0 +1,186 @@
+"""
+Fitting an effect's parameters to a real record by minimising the sim-to-real gap.
+
+The model is a callable ``simulate(effects, seed) -> observables``; ``effects`` is the
+catalogue's composable list ``[(name, params), ...]``. Every evaluation runs the same seeds
+(common random numbers), so the gap is a smooth function of the parameters and a 1-D search
+converges in a handful of evaluations. Parameters are searched coordinate-wise: a coarse grid
+(log-spaced where the parameter is a scale) to find the basin, then a bounded Brent refinement
+around the best grid point. Effects here have one to three parameters, so this is cheap and,
+unlike a gradient method, does not get stuck on the flat region where an effect is too small
+to matter.
+"""
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+from gyro_char.diagnosis import gap as diag_gap
+import numpy as np
+from scipy import optimize
+
+Effects = List[Tuple[str, dict]]
+Obs = Dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Param:
+    """
+    One searched parameter: bounds of its magnitude, scale, sign, and whether it is whole.
+
+    A whole-number parameter is searched over every value in [lo, hi] on the grid (no Brent
+    refinement); ``sign`` = -1 searches the magnitude of a negative parameter. A ``choice`` is
+    a whole-number structural parameter (a filter's number of stages, a process's order) that
+    changes what the other parameters mean: they are fitted anew for each of its values.
+    """
+
+    name: str
+    lo: float
+    hi: float
+    log: bool = True
+    integer: bool = False
+    sign: float = 1.0
+    choice: bool = False
+
+
+@dataclass
+class EffectSpace:
+    """What is searched for one catalogue effect on one record (bounds depend on the record)."""
+
+    name: str
+    params: List[Param]
+    fixed: dict = field(default_factory=dict)
+    # Data-driven starting values (e.g. the frequency of a detected tone), if any.
+    start: dict = field(default_factory=dict)
+
+
+@dataclass
+class Evaluation:
+    """The gap of one model, with the statistics of its repeated simulations."""
+
+    effects: Effects
+    gap: float
+    stats: List[diag_gap.SimStats]
+
+
+class GapObjective:
+    """Gap between fixed real observables and a model, simulated with fixed seeds."""
+
+    def __init__(self, reals: Sequence[Obs],
+                 simulate: Callable[[int, Effects, int], Obs], seeds: Sequence[int]):
+        # simulate(record_index, effects, seed) -> observables of a simulated twin of that record
+        self.reals = list(reals)
+        self.simulate = simulate
+        self.seeds = list(seeds)
+        self.calls = 0
+        # Scatter of the baseline's twins per record (diag_gap's deviance reference); None
+        # until the baseline is known, and the baseline's own gap is then the plain rms z.
+        self.reference: Optional[List[Obs]] = None
+
+    def evaluate(self, effects: Effects) -> Evaluation:
+        self.calls += 1
+        stats = [diag_gap.sim_stats([self.simulate(i, effects, s) for s in self.seeds])
+                 for i in range(len(self.reals))]
+        return Evaluation(effects=list(effects),
+                          gap=diag_gap.multi_gap(self.reals, stats, self.reference),
+                          stats=stats)
+
+    def set_reference(self, baseline: Evaluation) -> None:
+        self.reference = [s.std for s in baseline.stats]
+
+
+def _to_u(p: Param, v: float) -> float:
+    v = abs(v)
+    return float(np.log(v)) if p.log else float(v)
+
+
+def _from_u(p: Param, u: float) -> float:
+    v = float(np.exp(u)) if p.log else float(u)
+    return p.sign * (float(np.round(v)) if p.integer else v)
+
+
+def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *,
+               grid: int = 5, refine: int = 4, passes: int = 1,
+               near: Optional[dict] = None, at: Optional[int] = None) -> Tuple[dict, Evaluation]:
+    """
+    Best parameters of ``space`` added on top of ``selected``, and the evaluation there.
+
+    ``near``: parameters of an earlier fit of the same effect; the search then covers only
+    one coarse grid cell either side of them (3 points), which is what a later greedy step
+    needs when the effects already selected change the picture only a little. ``at``: the
+    position in ``selected`` where the effect goes (default: last); an effect's random numbers
+    follow its position, so a refit in place keeps the common random numbers.
+    Cost: about ``passes * len(params) * (grid + refine)`` evaluations of the objective, times
+    the number of values of a ``choice`` parameter (with ``near``, the choice is kept).
+    """
+    choices = [p for p in space.params if p.choice]
+    if choices:
+        p = choices[0]
+        rest = [q for q in space.params if q is not p]
+        values = ([near[p.name]] if near and p.name in near
+                  else np.arange(int(p.lo), int(p.hi) + 1, dtype=float))
+        fits = [fit_effect(objective, selected,
+                           EffectSpace(space.name, rest, {**space.fixed, p.name: float(v)},
+                                       space.start),
+                           grid=grid, refine=refine, passes=passes, near=near, at=at)
+                for v in values]
+        return min(fits, key=lambda f: f[1].gap)
+    values = {p.name: space.start.get(p.name, _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi))))
+              for p in space.params}
+    if near:
+        values.update({k: v for k, v in near.items() if k in values})
+    best = None
+
+    pos = len(selected) if at is None else at
+
+    def run(vals: dict) -> Evaluation:
+        return objective.evaluate(list(selected[:pos]) + [(space.name, {**space.fixed, **vals})]
+                                  + list(selected[pos:]))
+
+    for _ in range(passes):
+        for p in space.params:
+            if p.name in space.start and len(space.params) > 1 and passes == 1:
+                continue  # trusted data-driven value (e.g. tone frequency): spend on the rest
+            lo_u, hi_u = _to_u(p, p.lo), _to_u(p, p.hi)
+            if near and p.name in near:
+                cell = (hi_u - lo_u) / (grid - 1)
+                u0 = _to_u(p, values[p.name])
+                us = np.clip(np.array([u0 - cell, u0, u0 + cell]), lo_u, hi_u)
+            elif p.integer:
+                whole = np.unique(np.round(np.geomspace(p.lo, p.hi, grid + 2)))
+                us = np.array([_to_u(p, v) for v in whole])
+            else:
+                us = np.linspace(lo_u, hi_u, grid)
+            evals = []
+            for u in us:
+                e = run({**values, p.name: _from_u(p, u)})
+                evals.append(e)
+            k = int(np.argmin([e.gap for e in evals]))
+            cache = {}
+
+            def f(u, p=p):
+                e = run({**values, p.name: _from_u(p, u)})
+                cache[u] = e
+                return e.gap
+
+            a, b = us[max(k - 1, 0)], us[min(k + 1, us.size - 1)]
+            if p.integer:
+                # Every whole value between the best grid point's neighbours.
+                near_k = [v for v in range(int(round(abs(_from_u(p, a)))) + 1,
+                                           int(round(abs(_from_u(p, b)))))
+                          if v != int(round(abs(_from_u(p, us[k]))))]
+                u_best, e_best = us[k], evals[k]
+                for v in near_k:
+                    e = run({**values, p.name: p.sign * float(v)})
+                    if e.gap < e_best.gap:
+                        u_best, e_best = _to_u(p, float(v)), e
+            elif refine > 0 and b > a:
+                res = optimize.minimize_scalar(f, bounds=(a, b), method='bounded',
+                                               options={'maxiter': refine, 'xatol': 1e-3})
+                cand = cache.get(res.x) or run({**values, p.name: _from_u(p, res.x)})
+                u_best, e_best = (res.x, cand) if cand.gap < evals[k].gap else (us[k], evals[k])
+            else:
+                u_best, e_best = us[k], evals[k]
+            values[p.name] = _from_u(p, u_best)
+            best = e_best
+    if best is None:  # every parameter was fixed by the data
+        best = run(values)
+    return {**space.fixed, **values}, best

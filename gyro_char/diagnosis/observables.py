@@ -1,0 +1,169 @@
+"""
+Observables the sim-to-real diagnosis compares, computed identically on real and twin records.
+
+Each observable is a short vector ("block") with a coordinate per element, so that a gap can be
+located on it (which τ, which frequency, which lag). All blocks are cheap (O(n) or one Welch
+transform) because they are recomputed on every repeated simulation.
+
+Static blocks of one rate channel ``x`` (rad/s) sampled every ``dt`` seconds:
+
+- ``adev``: log10 of the overlapping Allan deviation on an octave τ grid (τ ≤ record / 8, where
+  the estimator still has some tens of degrees of freedom);
+- ``psd``: log10 of the Welch PSD averaged in log-spaced frequency bins (shape of the spectrum:
+  smoothing filters, coloured noise);
+- ``tone``: log10 prominence of the largest narrow peak over a running median of the PSD, in
+  equal-width frequency bands (tone detection);
+- ``acf``: autocorrelation at lags 1..8 samples (correlated neighbouring samples);
+- ``drift``: mean of the first 1/64, 1/32, ... 1/2 of the record minus the mean of the second
+  half (warm-up transients, curvature), in rad/s.
+
+Every block is computed on the record minus its least-squares line: bias and linear drift are
+part of the paper's model, so they never count as a gap.
+"""
+from dataclasses import dataclass
+from typing import Dict, Tuple
+
+from gyro_char.allan import kernel as allan
+import numpy as np
+from scipy import ndimage, signal
+
+STATIC_BLOCKS = ('adev', 'psd', 'tone', 'acf', 'drift')
+BLOCK_UNITS = {'adev': 's', 'psd': 'Hz', 'tone': 'Hz', 'acf': 'samples', 'drift': 's'}
+ACF_LAGS = 8
+PSD_BINS = 20
+TONE_BANDS = 10
+DRIFT_FRACTIONS = (1 / 64, 1 / 32, 1 / 16, 1 / 8, 1 / 4, 1 / 2)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Coordinates of every element of every block, for one record length and sample time."""
+
+    n: int
+    dt: float
+    coords: Dict[str, np.ndarray]
+    # Per block, the (lo, hi) range each element covers, in BLOCK_UNITS.
+    ranges: Dict[str, np.ndarray]
+
+
+def welch_segment(n: int) -> int:
+    """Welch segment length: fine enough to resolve tones, ≥ 16 segments for a stable PSD."""
+    return int(min(2048, 2 ** int(np.floor(np.log2(max(n // 16, 64))))))
+
+
+def octave_m(n: int) -> np.ndarray:
+    """Cluster sizes 1, 2, 4, ... up to n / 8 samples."""
+    top = max(int(np.floor(np.log2(n / 8))), 0)
+    return 2 ** np.arange(top + 1)
+
+
+def static_layout(n: int, dt: float) -> Layout:
+    if n < 1024:
+        raise ValueError(f'record too short for the diagnosis: {n} samples (need >= 1024)')
+    m = octave_m(n)
+    tau = m * dt
+    fs = 1.0 / dt
+    nps = welch_segment(n)
+    f = np.fft.rfftfreq(nps, dt)
+    edges = np.geomspace(2 * f[1], fs / 2, PSD_BINS + 1)
+    band = np.linspace(0, fs / 2, TONE_BANDS + 1)
+    lags = np.arange(1, ACF_LAGS + 1, dtype=float)
+    frac = np.asarray(DRIFT_FRACTIONS)
+    coords = {
+        'adev': tau,
+        'psd': np.sqrt(edges[:-1] * edges[1:]),
+        'tone': 0.5 * (band[:-1] + band[1:]),
+        'acf': lags,
+        'drift': frac * n * dt,
+    }
+    ranges = {
+        'adev': np.c_[tau, tau],
+        'psd': np.c_[edges[:-1], edges[1:]],
+        'tone': np.c_[band[:-1], band[1:]],
+        'acf': np.c_[lags, lags],
+        'drift': np.c_[np.zeros_like(frac), frac * n * dt],
+    }
+    return Layout(n=n, dt=dt, coords=coords, ranges=ranges)
+
+
+def overlapping_adev(x: np.ndarray, m: np.ndarray, dt: float = 1.0) -> np.ndarray:
+    """Fully overlapping Allan deviation of rate samples for cluster sizes ``m`` (samples)."""
+    _, avar, _ = allan.overlapping_avar(x, dt, m=m)
+    return np.sqrt(avar)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> float:
+    # einsum, not np.dot: a threaded BLAS call on a busy 2-core machine costs ~40x more.
+    return float(np.einsum('i,i->', a, b))
+
+
+def detrend(x: np.ndarray) -> np.ndarray:
+    """Remove the least-squares line: bias and linear drift belong to the paper's baseline."""
+    k = np.arange(x.size, dtype=np.float64)
+    k -= k.mean()
+    y = x - x.mean()
+    return y - k * (_dot(k, y) / _dot(k, k))
+
+
+def welch_psd(x: np.ndarray, dt: float) -> Tuple[np.ndarray, np.ndarray]:
+    """One-sided Welch PSD (Hann, 50 % overlap) of the mean-removed record."""
+    return signal.welch(x - x.mean(), fs=1.0 / dt, nperseg=welch_segment(x.size))
+
+
+def tone_prominence(f: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """log10(PSD / running median of the PSD) per frequency: narrow peaks stand out."""
+    # A window of ~1/10 of the band: wide enough that a peak a few bins wide stands out.
+    base = ndimage.median_filter(p, size=max(31, (p.size // 10) | 1), mode='nearest')
+    return np.log10(np.maximum(p, 1e-300) / np.maximum(base, 1e-300))
+
+
+def autocorrelation(x: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
+    y = x - x.mean()
+    v = _dot(y, y)
+    if v <= 0:
+        return np.zeros(lags)
+    return np.array([_dot(y[:-k], y[k:]) / v for k in range(1, lags + 1)])
+
+
+def static_observables(x: np.ndarray, layout: Layout) -> Dict[str, np.ndarray]:
+    """All static blocks of one rate channel (rad/s) whose length matches ``layout``."""
+    x = detrend(np.asarray(x, dtype=np.float64))
+    if x.size != layout.n:
+        raise ValueError(f'record has {x.size} samples, layout expects {layout.n}')
+    m = octave_m(layout.n)
+    f, p = welch_psd(x, layout.dt)
+    edges = layout.ranges['psd']
+    psd = np.empty(len(edges))
+    for i, (lo, hi) in enumerate(edges):
+        sel = (f >= lo) & (f < hi) if i < len(edges) - 1 else (f >= lo) & (f <= hi)
+        psd[i] = np.mean(p[sel]) if sel.any() else np.interp(0.5 * (lo + hi), f, p)
+    prom = tone_prominence(f, p)
+    tone = np.empty(len(layout.ranges['tone']))
+    for i, (lo, hi) in enumerate(layout.ranges['tone']):
+        sel = (f > max(lo, f[1])) & (f <= hi)
+        tone[i] = prom[sel].max() if sel.any() else 0.0
+    half = x[x.size // 2:].mean()
+    drift = np.array([x[:max(int(fr * x.size), 1)].mean() - half for fr in DRIFT_FRACTIONS])
+    return {
+        'adev': np.log10(np.maximum(overlapping_adev(x, m, layout.dt), 1e-300)),
+        'psd': np.log10(np.maximum(psd, 1e-300)),
+        'tone': tone,
+        'acf': autocorrelation(x),
+        'drift': drift,
+    }
+
+
+def detected_tones(x: np.ndarray, dt: float, *, min_prominence: float = 0.5,
+                   max_tones: int = 3) -> np.ndarray:
+    """Frequencies (Hz) of the strongest narrow peaks, 3x above the running median or more."""
+    f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
+    prom = tone_prominence(f, p)
+    prom[:2] = 0.0
+    order = np.argsort(prom)[::-1]
+    found = []
+    for i in order:
+        if prom[i] < min_prominence or len(found) >= max_tones:
+            break
+        if all(abs(f[i] - g) > 3 * f[1] for g in found):
+            found.append(f[i])
+    return np.asarray(found, dtype=float)

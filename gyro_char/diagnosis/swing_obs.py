@@ -1,0 +1,238 @@
+"""
+Observables of a swing record for the diagnosis, computed identically on record and twins.
+
+The gyro angle (trapezoid integral of the rate at its stamps) minus the least-squares fit of
+``(1 + Δρ) · encoder angle + offset + bias · t + drift · t² / 2`` (encoder interpolated at the
+gyro stamps), decomposed on the swing phase θ = ωt + ψ of the encoder's own sine fit:
+
+- ``quadrature``: the residual's cos θ component (rad). A stamp delay d leaves -A ω d cos θ;
+  a g-sensitivity g_y leaves -g_y g A / ω cos θ - the same shape on one period and amplitude,
+  hence the ambiguity the engine reports for that pair;
+- no in-phase (sin θ) block: ``(1 + Δρ)`` absorbs anything in phase with the angle, so in one
+  run it is unobservable; across runs it is the ``scale_factor_shift`` block
+  (``diagnosis.swing``);
+- ``harmonic_2f`` / ``harmonic_3f``: sin and cos of 2θ and 3θ (scale-factor asymmetry and the
+  quadratic term give 2f, the cubic term 3f);
+- ``residual_psd``: log10 Welch PSD of the residual's rate (its difference over dt) in log bins
+  from 1 Hz to 1/8 of the sample rate (stamp jitter, encoder interpolation error, smoothing).
+
+The same fit, evaluated on the ENCODER stamps (gyro angle interpolated there), gives the
+residual the encoder's own errors show in at full encoder rate (``encoder_residual``):
+
+- ``encoder_lines``: its spectrum against the encoder ANGLE (``line_spectrum``), log10 of the
+  largest amplitude (rad) in each log band of line counts (cycles per revolution) from 64 to
+  16384. A sine-cosine interpolation error is periodic in the angle, 2π / L, whatever the
+  rate: every pass over an angle adds coherently, while the gyro's and the encoder's noise
+  do not. Bands reaching above the encoder's angle Nyquist π / (peak rate x encoder
+  interval) (7100 lines at 1 kHz on a 0.44 rad/s swing) read 0 (log10 of 1: not measured).
+  The peak's line count per band is kept unscored (``SwingObs.line_peaks``) for
+  ``diagnosis.swing_spaces.signs``;
+- ``rate_locked``: the (high-passed) residual's increment variance in bins of |cos θ| (i.e.
+  of the swing rate) minus that of the slowest bin, per unit of rate² (``rate_locked``). An
+  encoder stamp error δ reads as an angle error rate · δ, a noise whose variance grows as the
+  rate squared; the gyro's white noise, the quantizations and the encoder's white noise do
+  not depend on the swing phase;
+- ``increment_acf``: normalised autocorrelation at lags 1..4 of the GYRO-stamp residual's
+  increments (high-passed like the encoder-stamp one). This is the residual's whiteness, not
+  the swing filter's innovations (``swing.batch`` folds rows into a square-root information
+  factor and never forms them); for the gyro stream the two differ by the fitted
+  deterministic part only. Colouring of the gyro noise (a sensor FIR such as a fractional
+  group delay, smoothing) shows here.
+
+Whole-record components rather than per-window ones: a constant effect's z grows with the
+record length instead of being spread over windows; the twins' repeats give the scatter.
+"""
+from typing import List, Tuple
+
+from gyro_char.swing.align import integrate
+import numpy as np
+from scipy import signal
+
+PSD_BINS = 10
+# Line-count bands (cycles per revolution) of ``encoder_lines``.
+LINE_EDGES = np.geomspace(64.0, 16384.0, 9)
+# Angle bins of the line spectrum: Nyquist 1.25 x the top band edge.
+ANGLE_BIN = np.pi / (1.25 * LINE_EDGES[-1])
+# Residual high-pass (span of a centred moving mean, s) before the line spectrum, the rate
+# bins and the whiteness: the gyro angle's random walk is slow in time and would leak into
+# every line count at the turning points, where the angle stands still; an effect's swing
+# harmonics would dominate the increments.
+HP_SECONDS = 0.2
+# |cos θ| bin edges of ``rate_locked`` (the first bin is the reference).
+RATE_EDGES = (0.0, 0.3, 0.6, 0.85, 1.0001)
+STAMP_UNIT = 1e-6  # s, scale of ``rate_locked``
+ACF_LAGS = 4
+TWO_PI = 2.0 * np.pi
+
+
+class SwingObs(dict):
+    """Observable blocks of one record, plus the unscored ``line_peaks`` (see module doc)."""
+
+    line_peaks: np.ndarray = np.array([])
+
+
+def _solve(cols: List[np.ndarray], y: np.ndarray) -> np.ndarray:
+    # Normal equations with einsum (a threaded BLAS lstsq is slow on a busy 2-core machine);
+    # columns are scaled to unit rms so the 7x7 system stays well conditioned.
+    a = np.array(cols)
+    s = np.sqrt(np.einsum('ij,ij->i', a, a) / y.size)
+    s[s == 0] = 1.0
+    a = a / s[:, None]
+    coef = np.linalg.solve(np.einsum('ik,jk->ij', a, a), np.einsum('ik,k->i', a, y))
+    return coef / s
+
+
+def layout(n_psd: int, dt: float, period_s: float) -> dict:
+    """Per block, the (lo, hi) range of every element (units in ``UNITS``)."""
+    f0 = 1.0 / period_s
+    # Up to 1/8 of the sample rate: above it the residual is shaped by where the gyro stamps
+    # fall between encoder samples (linear interpolation), which says nothing about the gyro.
+    edges = np.geomspace(1.0, 0.125 / dt, PSD_BINS + 1)
+    lags = np.arange(1, ACF_LAGS + 1) * dt
+    return {'quadrature': np.array([[f0, f0]]),
+            'harmonic_2f': np.array([[2 * f0, 2 * f0]] * 2),
+            'harmonic_3f': np.array([[3 * f0, 3 * f0]] * 2),
+            'residual_psd': np.c_[edges[:-1], edges[1:]],
+            'encoder_lines': np.c_[LINE_EDGES[:-1], LINE_EDGES[1:]],
+            'rate_locked': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
+            'increment_acf': np.c_[lags, lags]}
+
+
+UNITS = {'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
+         'residual_psd': 'Hz', 'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|',
+         'increment_acf': 's'}
+
+
+def highpass(x: np.ndarray, n: int) -> np.ndarray:
+    """``x`` minus its centred moving mean over ``n`` samples (shorter at the ends)."""
+    c = np.concatenate(([0.0], np.cumsum(x)))
+    i = np.arange(x.size)
+    lo, hi = np.maximum(i - n // 2, 0), np.minimum(i + n // 2 + 1, x.size)
+    return x - (c[hi] - c[lo]) / (hi - lo)
+
+
+def line_spectrum(phi: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """
+    Amplitude spectrum (rad) of ``r`` against the angle ``phi``: line counts, amplitudes.
+
+    The Fourier integral over the angle, ∫ r(φ) e^(-i L φ) dφ along the whole record (every
+    pass over an angle adds coherently), as a Riemann sum: each sample weighs the angle step
+    it covers (so a slow passage, where the encoder dwells, weighs no more than a fast one),
+    Hann-windowed over the angle span. The sum is gridded onto bins of ``ANGLE_BIN`` and
+    Fourier-transformed with zero padding to twice the bin count (two bincounts and one FFT
+    of a few thousand points). A term a sin(L φ + p) reads a at line count L, down to ~0.8 a
+    at the top band edge (phase spread within a bin). Lines above π / (peak rate x sample
+    interval), 7100 for a 1 kHz encoder on a 0.44 rad/s swing, alias where the swing is
+    fastest: a line L also shows at about 2π / (peak rate x interval) - L (some 20 %).
+    """
+    span = max(float(phi.max() - phi.min()), ANGLE_BIN)
+    j = ((phi - phi.min()) / ANGLE_BIN).astype(np.intp)
+    n = int(j.max()) + 1
+    step = np.abs(np.gradient(phi))
+    w = step * (1.0 - np.cos(TWO_PI * (phi - phi.min()) / span))
+    s = np.bincount(j, r * w, minlength=n)
+    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    amp = 2.0 * np.abs(np.fft.rfft(s, nfft)) / max(float(w.sum()), 1e-300)
+    lines = TWO_PI * np.arange(amp.size) / (nfft * ANGLE_BIN)
+    return lines, amp
+
+
+def band_peaks(lines: np.ndarray, amp: np.ndarray,
+               edges: np.ndarray = LINE_EDGES) -> Tuple[np.ndarray, np.ndarray]:
+    """Largest amplitude per band and its line count (parabolic interpolation on log amp)."""
+    la = np.log(np.maximum(amp, 1e-300))
+    dl = lines[1] - lines[0]
+    peaks, where = np.zeros(edges.size - 1), np.zeros(edges.size - 1)
+    for b, (lo, hi) in enumerate(zip(edges[:-1], edges[1:])):
+        idx = np.flatnonzero((lines >= lo) & (lines < hi))
+        k = int(idx[np.argmax(amp[idx])])
+        off = 0.0
+        if 0 < k < amp.size - 1:
+            den = la[k - 1] - 2.0 * la[k] + la[k + 1]
+            off = 0.5 * (la[k - 1] - la[k + 1]) / den if den < 0 else 0.0
+        peaks[b], where[b] = amp[k], lines[k] + off * dl
+    return peaks, where
+
+
+def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
+    """
+    Apparent stamp-error variance per |cos th| bin, from the increments ``d`` (asinh, µs²).
+
+    Per bin k, the mean square of ``d`` minus that of the slowest bin, over twice the mean
+    squared swing rate (``peak_rate`` |cos th|) minus the slowest bin's: a white stamp error
+    of σ reads σ² in every bin. A difference, not a ratio, so that white angle noise (which
+    the baseline fit may have inflated with an encoder error it cannot model) cancels instead
+    of diluting it; asinh(x / 1 µs²) keeps the sign and compresses like a log above 1 µs².
+    """
+    nb = len(RATE_EDGES) - 1
+    c = np.abs(np.cos(th))
+    k = np.clip(np.digitize(c, RATE_EDGES) - 1, 0, nb - 1)
+    cnt = np.maximum(np.bincount(k, minlength=nb), 1)
+    ms = np.bincount(k, d * d, minlength=nb) / cnt
+    w2 = peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt
+    var = (ms[1:] - ms[0]) / np.maximum(2.0 * (w2[1:] - w2[0]), 1e-300)
+    return np.arcsinh(var / STAMP_UNIT ** 2)
+
+
+def increment_acf(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
+    """Normalised autocorrelation of the increments of ``r`` at lags 1..``lags``."""
+    d = np.diff(r)
+    d = d - d.mean()
+    # einsum, not np.dot: a threaded BLAS call costs more than the sum on a busy machine.
+    v = float(np.einsum('i,i->', d, d))
+    return np.array([np.einsum('i,i->', d[:-k], d[k:]) / max(v, 1e-300)
+                     for k in range(1, lags + 1)])
+
+
+def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarray,
+                      period_s: float, ranges: dict) -> SwingObs:
+    """All swing blocks of one record (gyro rate rad/s at ``t_g``, encoder rad at ``t_e``)."""
+    lo, hi = max(t_g[0], t_e[0]), min(t_g[-1], t_e[-1])
+    m = (t_g >= lo) & (t_g <= hi)
+    tau = t_g[m] - lo
+    ang = integrate(tau, rate[m])
+    e = np.interp(tau, t_e - lo, enc)
+    w = 2.0 * np.pi / period_s
+    s1, c1 = np.sin(w * tau), np.cos(w * tau)
+    span = max(tau[-1], 1e-9)
+    ts = tau / span
+    one = np.ones_like(tau)
+    ce = _solve([s1, c1, one, ts, ts * ts], e)
+    psi = float(np.arctan2(ce[1], ce[0]))
+    line = [one, ts, ts * ts]
+    k = _solve([e] + line, ang)
+    r = ang - k[0] * e - (k[1] + k[2] * ts + k[3] * ts * ts)
+    th = w * tau + psi
+    cols = [np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
+            np.cos(3 * th)]
+    h = _solve(cols + line, r)
+    dt = float(np.median(np.diff(tau)))
+    f, p = signal.welch(np.diff(r) / dt, fs=1.0 / dt, nperseg=min(2048, r.size // 8))
+    psd = np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
+                    else np.interp(0.5 * (a + b), f, p) for a, b in ranges['residual_psd']])
+    # The same fit on the encoder stamps inside the gyro span.
+    me = (t_e >= lo + tau[0]) & (t_e <= lo + tau[-1])
+    tau_e, phi = t_e[me] - lo, enc[me]
+    tse = tau_e / span
+    r_e = np.interp(tau_e, tau, ang) - k[0] * phi - (k[1] + k[2] * tse + k[3] * tse * tse)
+    # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
+    # large, deterministic, and the harmonic blocks' business - must not pass for noise here.
+    hp_e = highpass(r_e, int(round(HP_SECONDS / max(float(np.median(np.diff(tau_e))), 1e-9))))
+    peaks, where = band_peaks(*line_spectrum(phi, hp_e))
+    # Bands reaching above the encoder's angle Nyquist at the peak swing rate hold aliases of
+    # the gyro/encoder stamp pattern, which twins at rates differing by ppm do not share (z
+    # of 3 on clean records): a constant, so that they score nothing.
+    peak_rate = w * float(np.hypot(ce[0], ce[1]))
+    nyquist = np.pi / max(peak_rate * float(np.median(np.diff(tau_e))), 1e-300)
+    above = LINE_EDGES[1:] > nyquist
+    peaks[above], where[above] = 1.0, np.nan
+    th_e = w * 0.5 * (tau_e[1:] + tau_e[:-1]) + psi
+    # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
+    out = SwingObs({'quadrature': h[1:2], 'harmonic_2f': h[2:4],
+                    'harmonic_3f': h[4:6],
+                    'residual_psd': np.log10(np.maximum(psd, 1e-300)),
+                    'encoder_lines': np.log10(np.maximum(peaks, 1e-300)),
+                    'rate_locked': rate_locked(th_e, np.diff(hp_e), peak_rate),
+                    'increment_acf': increment_acf(highpass(r, int(round(HP_SECONDS / dt))))})
+    out.line_peaks = where
+    return out

@@ -1,0 +1,122 @@
+"""
+Search spaces of the swing diagnosis's candidate effects, scaled to the fitted record.
+
+Bounds come from the record's own noise (what an effect must reach to be seen); signed
+parameters get the sign that moves the twins towards the record, and the encoder's line
+count starts at the line the record's encoder residual shows (``signs``).
+"""
+from typing import Callable, List, Optional, Sequence
+
+from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.swing_baseline import SwingBaseline
+import numpy as np
+
+G0 = 9.80665
+
+
+def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
+    """Search spaces scaled to the record (sign of signed parameters set by ``_signs``)."""
+    w = 2.0 * np.pi / base.period_s
+    rate = base.amplitude * w                       # peak swing rate, rad/s
+    sig = base.N / np.sqrt(base.duration)           # rate noise averaged over the record
+    # Quadrature noise of the angle residual at the swing frequency (random-walk angle of PSD
+    # N^2 / w^2 projected over the record): a delay and a g-sensitivity are searched over
+    # the same span of quadrature amplitudes, so neither is favoured by its grid.
+    q = base.N / w * np.sqrt(2.0 / base.duration)
+    return [
+        EffectSpace('time_delay', [Param('delay_s', 0.5 * q / rate, 200.0 * q / rate)]),
+        EffectSpace('g_sensitivity', [Param('gy', 0.5 * q * w / (G0 * base.amplitude),
+                                            200.0 * q * w / (G0 * base.amplitude))]),
+        EffectSpace('scale_factor_nonlinearity', [
+            Param('k2', 0.03 * sig / rate ** 2, 300.0 * sig / rate ** 2),
+            Param('k3', 0.03 * sig / rate ** 3, 300.0 * sig / rate ** 3)]),
+        EffectSpace('scale_factor_asymmetry', [Param('a', 0.03 * sig / rate,
+                                                     300.0 * sig / rate)]),
+        # Line count: started by ``signs`` at the record's line-spectrum peak (exact to a
+        # fraction of a line); its range is +-1 % around that start (a whole number).
+        EffectSpace('encoder_cyclic_error', [Param('a1', 0.1 * base.encoder_sigma + 1e-9,
+                                                   30.0 * base.encoder_sigma + 1e-7)],
+                    fixed={'a2': 0.0}),
+        # Both streams: an IMU stamp error alone leaves no first-order trace here (the gyro
+        # angle and the encoder read at the same wrong stamp move together); an encoder
+        # stamp error shows as residual angle noise rate x error. Down to 0.2 % of the
+        # encoder interval (2 µs at 1 kHz): below the ``rate_locked`` floor of a clean record.
+        EffectSpace('timestamp_jitter', [Param('sigma_s', 0.002 * base.encoder_dt,
+                                               0.4 * base.encoder_dt)],
+                    fixed={'stream': 2.0}),
+    ]
+
+
+SIGNED = {'time_delay': ['delay_s'], 'g_sensitivity': ['gy'],
+          'scale_factor_nonlinearity': ['k2', 'k3'], 'scale_factor_asymmetry': ['a']}
+
+
+def signs(spaces: List[EffectSpace], reals: Sequence[dict],
+          simulate: Callable[[int, list, int], dict]) -> List[EffectSpace]:
+    """
+    Give each signed parameter the sign that moves the twins towards the record.
+
+    A probe twin with the parameter at its range's geometric middle, against a baseline twin
+    of the same seed (common random numbers: the difference is the effect alone), gives the
+    effect's response on the harmonic blocks; its projection on the record's departure from
+    the baseline twin gives the sign. With several records (``simulate(record, effects, seed)``
+    as in ``diagnose.Problem``) the departures of all of them are projected together.
+    The encoder cyclic error's line count is started at the records' line (``with_lines``).
+    """
+    blocks = ('quadrature', 'harmonic_2f', 'harmonic_3f')
+    idx = range(len(reals))
+    base = [simulate(i, [], 4242) for i in idx]
+    dev = np.concatenate([reals[i][b] - base[i][b] for i in idx for b in blocks])
+    out = []
+    for sp in spaces:
+        if sp.name == 'encoder_cyclic_error':
+            sp = with_lines(sp, reals, base)
+        params = []
+        for p in sp.params:
+            if p.name in SIGNED.get(sp.name, []):
+                fx = [(sp.name, {**sp.fixed, p.name: float(np.sqrt(p.lo * p.hi))})]
+                probe = [simulate(i, fx, 4242) for i in idx]
+                resp = np.concatenate([probe[i][b] - base[i][b] for i in idx for b in blocks])
+                sign = 1.0 if float(np.einsum('i,i->', resp, dev)) >= 0 else -1.0
+                p = Param(p.name, p.lo, p.hi, p.log, p.integer, sign)
+            params.append(p)
+        out.append(EffectSpace(sp.name, params, dict(sp.fixed), dict(sp.start)))
+    return out
+
+
+# Line-spectrum excess (log10 amplitude) above which a band is taken as a line, not noise.
+LINE_EXCESS = 0.3
+
+
+def line_start(reals: Sequence[dict], base: Sequence[dict]) -> Optional[float]:
+    """
+    Line count of the record's encoder error: the strongest line that stands out of the twin.
+
+    Among the bands of ``encoder_lines`` where a record exceeds its baseline twin by more
+    than ``LINE_EXCESS`` (a factor 2 in amplitude), the one with the largest amplitude (a
+    cyclic error's first harmonic is its largest); failing any, the band of largest excess.
+    Its peak's line count (``SwingObs.line_peaks``, interpolated between FFT bins) is rounded
+    to a whole number. None when the observables carry no peaks.
+    """
+    best, key = None, None
+    for r, b in zip(reals, base):
+        peaks = getattr(r, 'line_peaks', None)
+        if peaks is None or len(peaks) == 0 or 'encoder_lines' not in r:
+            continue
+        ex = np.asarray(r['encoder_lines']) - np.asarray(b['encoder_lines'])
+        for k in np.flatnonzero(np.isfinite(peaks)):
+            rank = (ex[k] > LINE_EXCESS, r['encoder_lines'][k] if ex[k] > LINE_EXCESS else ex[k])
+            if key is None or rank > key:
+                best, key = float(np.round(peaks[k])), rank
+    return best
+
+
+def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> EffectSpace:
+    """``sp`` with ``lines`` started at the record's line and searchable within +-1 %."""
+    start = line_start(reals, base)
+    if start is None or start < 1:
+        return sp
+    lines = Param('lines', max(1.0, np.floor(0.99 * start)), np.ceil(1.01 * start),
+                  integer=True)
+    fixed = {k: v for k, v in sp.fixed.items() if k != 'lines'}
+    return EffectSpace(sp.name, list(sp.params) + [lines], fixed, {**sp.start, 'lines': start})

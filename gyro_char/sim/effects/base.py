@@ -1,0 +1,156 @@
+"""
+Unmodelled effects as composable additions to the bench simulator (docs/design.md).
+
+The paper's model (``gyro_char.sim.simulator``) is the baseline. An effect is a subclass of
+``Effect`` registered under its catalogue name in ``EFFECTS``; the simulator calls its hooks at
+fixed stages of the chain, in the order the user listed the effects. Every hook has a no-op
+default, so an effect overrides only the stages it acts on.
+
+The chain, per run (``ctx`` is a ``SimContext``; gyro/accel arrays are 3 x n, rows x, y, z, SI):
+
+1. ``oversample(ctx) -> int``: internal samples per output sample this effect needs (the
+   simulator runs the sensor chain at ``output rate x max(oversample)``; default 1).
+2. Stand motion and the sensor's true inputs at the internal sample instants: ``ctx.t``,
+   ``ctx.angle`` (stand angle), ``ctx.true_rate`` and ``ctx.specific_force`` (3 x n, sensor
+   frame). The baseline response is formed: gyro = (1 + scale error) cos(misalignment) rate +
+   bias + drift t + IEEE noise terms; accel = specific force + bias + noise.
+3. ``sensor(ctx, gyro, accel) -> (gyro, accel)``: physical errors at the internal rate (tones,
+   g-sensitivity, nonlinearity, extra noise processes, thermal transients...).
+4. ``internal(ctx, gyro, accel) -> (gyro, accel)``: the sensor's own digital processing at the
+   internal rate (e.g. ``internal_lowpass``); same length in and out. The simulator then
+   decimates to the output rate by keeping every D-th sample.
+5. ``output(ctx, gyro, accel) -> (gyro, accel)``: at the output rate, before the baseline output
+   quantization dH (``ctx.t_out`` holds the true output sample instants).
+6. ``stamps(ctx, t) -> t``: IMU header stamps from the true output sample instants.
+7. ``encoder_angle(ctx, t, angle) -> angle``: the encoder's reading of the true stand angle at
+   its sample instants, before its level/word quantization (swing runs only).
+8. ``encoder_stamps(ctx, t) -> t``: encoder header stamps (swing runs only).
+9. ``update_truth(ctx, truth)``: edit the ``truth.json`` dict where the effect maps exactly onto
+   a reported quantity (e.g. ``bias_instability`` adds to B in quadrature).
+
+Random numbers: ``ctx.rng(key)`` gives a generator seeded from (run seed, key); an effect uses
+``self.rng(ctx)`` (key = its name and position), so adding an effect never changes the baseline
+noise of the same seed - the clean/effect pair of records differs only by the effect.
+
+Parameters: each effect lists ``PARAMS = {name: (default, unit, description)}`` (floats, SI);
+``parse_effect('time_delay:delay_s=0.002')`` builds one from the CLI syntax ``NAME[:k=v,...]``.
+Axis-selecting parameters take 0, 1, 2 for x, y, z (floats in the CLI, cast to int).
+"""
+from dataclasses import dataclass, field
+from typing import Any, Callable, Dict, Optional, Tuple
+import zlib
+
+from gyro_char.errors import InputError
+import numpy as np
+
+
+Array = np.ndarray
+
+
+@dataclass
+class SimContext:
+    """What the hooks may read: the config, the run kind, the time bases and true inputs."""
+
+    config: Any                     # gyro_char.sim.config.BenchConfig
+    kind: str                       # 'static' or 'swing'
+    seed: int
+    dt: float                       # output sample interval, s
+    oversample: int = 1             # internal samples per output sample
+    axis: int = 0                   # row of the gyro axis on the swing axis
+    t: Optional[Array] = None       # true internal sample instants, s
+    t_out: Optional[Array] = None   # true output sample instants, s
+    angle: Optional[Array] = None   # stand angle at ctx.t, rad (zeros for static)
+    true_rate: Optional[Array] = None       # 3 x n true angular rate, sensor frame, rad/s
+    specific_force: Optional[Array] = None  # 3 x n true specific force, m/s^2
+    # Stand motion as functions of time (swing runs), for effects that need it elsewhere.
+    stand_angle: Optional[Callable[[Array], Array]] = None
+    extras: Dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def dt_internal(self) -> float:
+        return self.dt / self.oversample
+
+    def rng(self, key: str) -> np.random.Generator:
+        """Independent, reproducible stream for ``key`` under this run's seed."""
+        return np.random.default_rng([self.seed, zlib.crc32(key.encode('utf-8'))])
+
+
+class Effect:
+    """Base class: documented parameters and no-op hooks (see the module docstring)."""
+
+    name = ''
+    summary = ''
+    physics = ''
+    PARAMS: Dict[str, Tuple[float, str, str]] = {}
+
+    def __init__(self, index: int = 0, **params: float) -> None:
+        unknown = set(params) - set(self.PARAMS)
+        if unknown:
+            raise InputError(f'effect {self.name}: unknown parameter(s) '
+                             f'{", ".join(sorted(unknown))}; known: '
+                             f'{", ".join(self.PARAMS) or "none"}')
+        self.index = index
+        self.params: Dict[str, float] = {}
+        for key, (default, _unit, _doc) in self.PARAMS.items():
+            value = params.get(key, default)
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise InputError(f'effect {self.name}: {key} must be a number, '
+                                 f'got {value!r}') from None
+            if not np.isfinite(value):
+                raise InputError(f'effect {self.name}: {key} must be finite')
+            self.params[key] = value
+        self.check()
+
+    def __getattr__(self, key: str) -> float:
+        params = self.__dict__.get('params', {})
+        if key in params:
+            return params[key]
+        raise AttributeError(key)
+
+    def check(self) -> None:
+        """Refuse impossible parameter values with ``InputError`` (override as needed)."""
+
+    def describe(self) -> dict:
+        """Return the entry of truth.json's ``effects`` list."""
+        return {'name': self.name, 'params': dict(self.params)}
+
+    def rng(self, ctx: SimContext) -> np.random.Generator:
+        return ctx.rng(f'effect:{self.name}:{self.index}')
+
+    # ---- hooks (no-op defaults) -------------------------------------------------------
+    def oversample(self, ctx: SimContext) -> int:
+        return 1
+
+    def sensor(self, ctx: SimContext, gyro: Array, accel: Array) -> Tuple[Array, Array]:
+        return gyro, accel
+
+    def internal(self, ctx: SimContext, gyro: Array, accel: Array) -> Tuple[Array, Array]:
+        return gyro, accel
+
+    def output(self, ctx: SimContext, gyro: Array, accel: Array) -> Tuple[Array, Array]:
+        return gyro, accel
+
+    def stamps(self, ctx: SimContext, t: Array) -> Array:
+        return t
+
+    def encoder_angle(self, ctx: SimContext, t: Array, angle: Array) -> Array:
+        return angle
+
+    def encoder_stamps(self, ctx: SimContext, t: Array) -> Array:
+        return t
+
+    def update_truth(self, ctx: SimContext, truth: dict) -> None:
+        return None
+
+
+EFFECTS: Dict[str, type] = {}
+
+
+def register(cls: type) -> type:
+    """Class decorator adding an effect to the catalogue under ``cls.name``."""
+    if not cls.name or cls.name in EFFECTS:
+        raise ValueError(f'effect name {cls.name!r} empty or registered twice')
+    EFFECTS[cls.name] = cls
+    return cls

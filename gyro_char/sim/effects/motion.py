@@ -1,0 +1,111 @@
+"""
+Motion-dependent effects: scale-factor shape, cross-axis coupling, g-sensitivity, encoder error.
+
+These act on the true inputs (``ctx.true_rate``, ``ctx.specific_force``, the stand angle) and
+so show mostly on swing runs. They leave the baseline truth unchanged: their signatures are
+harmonics or phase-locked residuals rather than a change of the reported coefficients.
+"""
+from gyro_char.errors import InputError
+from gyro_char.sim.config import AXES
+from gyro_char.sim.effects.base import Effect, register
+import numpy as np
+
+
+@register
+class ScaleFactorNonlinearity(Effect):
+    """Quadratic and cubic terms of the rate response."""
+
+    name = 'scale_factor_nonlinearity'
+    summary = 'rate response with quadratic / cubic terms'
+    physics = ('omega_out += k2 omega^2 + k3 omega^3 on every gyro axis (omega: true rate '
+               'along that axis). For omega = W cos(wt): k2 gives a DC offset k2 W^2 / 2 and '
+               'a 2f line k2 W^2 / 2; k3 gives 3 k3 W^3 / 4 at f (an apparent scale-factor '
+               'error 3 k3 W^2 / 4) and a 3f line k3 W^3 / 4.')
+    PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
+              'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient')}
+
+    def sensor(self, ctx, gyro, accel):
+        w = ctx.true_rate
+        return gyro + self.k2 * w * w + self.k3 * w * w * w, accel
+
+
+@register
+class ScaleFactorAsymmetry(Effect):
+    """Different scale factors for positive and negative rates."""
+
+    name = 'scale_factor_asymmetry'
+    summary = 'scale factor (1 + a) for positive, (1 - a) for negative rates'
+    physics = ('omega_out += a |omega|. For omega = W cos(wt): a DC offset 2 a W / pi and '
+               'even harmonics (2f: 4 a W / (3 pi)); no change at f.')
+    PARAMS = {'a': (1.0e-3, '1', 'half the difference of the two scale factors')}
+
+    def sensor(self, ctx, gyro, accel):
+        return gyro + self.a * np.abs(ctx.true_rate), accel
+
+
+@register
+class CrossAxis(Effect):
+    """Non-orthogonality: each gyro axis senses a fraction of the other axes' rates."""
+
+    name = 'cross_axis'
+    summary = 'misalignment coupling of rate into the other gyro axes'
+    physics = ('omega_out_i += sum_j m_ij omega_j (j != i), m_ij small angles in rad (datasheet '
+               'axis-to-axis misalignment). On a swing run the off-axis gyros show the swing '
+               'rate scaled by m_ij, in phase with the rate.')
+    PARAMS = {f'{a}{b}': (2.0e-3 if (a, b) in (('y', 'x'), ('z', 'x')) else 0.0, 'rad',
+                          f'sensitivity of gyro {a} to rate about {b}')
+              for a in AXES for b in AXES if a != b}
+
+    def sensor(self, ctx, gyro, accel):
+        gyro = gyro.copy()
+        for i, a in enumerate(AXES):
+            for j, b in enumerate(AXES):
+                if i != j and self.params[a + b]:
+                    gyro[i] += self.params[a + b] * ctx.true_rate[j]
+        return gyro, accel
+
+
+@register
+class GSensitivity(Effect):
+    """Gyro bias proportional to the specific force (linear-acceleration effect)."""
+
+    name = 'g_sensitivity'
+    summary = 'gyro bias proportional to specific force'
+    physics = ('omega_out_i += gx f_x + gy f_y + gz f_z on every gyro axis (f: specific force '
+               'in the sensor frame, m/s^2). Datasheet: 0.05 deg/s/g for the ADIS16405, '
+               '~9e-5 rad/s per m/s^2. On a stand tilting about x, f_y = g sin(phi): a '
+               'residual in phase with the angle (like a delay would be with the rate).')
+    PARAMS = {'gx': (0.0, 'rad/s/(m/s^2)', 'sensitivity to f_x'),
+              'gy': (9.0e-5, 'rad/s/(m/s^2)', 'sensitivity to f_y'),
+              'gz': (0.0, 'rad/s/(m/s^2)', 'sensitivity to f_z')}
+
+    def sensor(self, ctx, gyro, accel):
+        f = ctx.specific_force
+        extra = self.gx * f[0] + self.gy * f[1] + self.gz * f[2]
+        return gyro + extra[None, :], accel
+
+
+@register
+class EncoderCyclicError(Effect):
+    """Sine-cosine interpolation error of the encoder, periodic in the angle."""
+
+    name = 'encoder_cyclic_error'
+    summary = 'encoder error locked to angle (sine-cosine interpolation error)'
+    physics = ('A sine-cosine encoder with L lines per revolution interpolates within each '
+               'signal period 2 pi / L; amplitude/offset/phase imbalance of the two tracks '
+               'gives errors at 1x and 2x the signal frequency: phi_read = phi + a1 sin(L phi '
+               '+ p1) + a2 sin(2 L phi + p2). On a swing the error is a chirp following the '
+               'rate (frequency L |phi_dot| / 2 pi).')
+    PARAMS = {'lines': (2048.0, '1/rev', 'signal periods per revolution L'),
+              'a1': (5.0e-6, 'rad', 'first-harmonic amplitude'),
+              'a2': (2.0e-6, 'rad', 'second-harmonic amplitude'),
+              'p1': (0.0, 'rad', 'first-harmonic phase'),
+              'p2': (0.0, 'rad', 'second-harmonic phase')}
+
+    def check(self):
+        if self.lines <= 0:
+            raise InputError('encoder_cyclic_error: lines must be > 0')
+
+    def encoder_angle(self, ctx, t, angle):
+        x = self.lines * angle
+        return angle + self.a1 * np.sin(x + self.p1) + self.a2 * np.sin(2.0 * x + self.p2)

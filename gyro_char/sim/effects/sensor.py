@@ -1,0 +1,309 @@
+"""
+Sensor effects: internal smoothing, thermal transient, extra noise processes, angle quantization.
+
+Axis-selecting parameters: ``axis`` -1 means all three gyro axes, 0/1/2 one of x/y/z.
+Effects that map exactly onto an IEEE 952 term (B, K, Q) add it, in quadrature, to the truth of
+the channels they touch; ``internal_lowpass`` rescales truth N by its exact long-tau gain.
+"""
+from gyro_char.errors import InputError
+from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
+from gyro_char.sim import noise_gen
+from gyro_char.sim.effects.base import Effect, register
+from gyro_char.units import DEG
+import numpy as np
+from scipy import signal
+
+
+def _axis_param(default: float = -1.0) -> tuple:
+    """Return the PARAMS entry of the ``axis`` parameter that ``_rows`` reads."""
+    return (default, '-', '-1: all gyro axes, 0/1/2: x/y/z')
+
+
+def _rows(effect) -> list:
+    axis = int(effect.params.get('axis', -1))
+    if axis not in (-1, 0, 1, 2):
+        raise InputError(f'{effect.name}: axis must be -1 (all), 0, 1 or 2')
+    return [0, 1, 2] if axis == -1 else [axis]
+
+
+def _add_truth_term(truth, rows, term, value):
+    for r in rows:
+        ch = truth['channels'].get(GYRO_CHANNELS[r])
+        if ch is not None:
+            ch[term] = float(np.hypot(ch[term], value))
+
+
+def bartlett_kernel(taps: int, stages: int) -> np.ndarray:
+    """Impulse response of ``stages`` cascaded ``taps``-point moving averages (unit DC gain)."""
+    h = np.ones(1)
+    for _ in range(stages):
+        h = np.convolve(h, np.full(taps, 1.0 / taps))
+    return h
+
+
+@register
+class InternalLowpass(Effect):
+    """The ADIS16405's Bartlett-window averaging at its internal rate, then decimation."""
+
+    name = 'internal_lowpass'
+    summary = 'sensor-internal FIR smoothing and decimation (correlated output samples)'
+    physics = ('The ADIS16405 samples at 819.2 Hz internally and applies a Bartlett-window FIR '
+               '(two cascaded N-point moving averages, N = 2^M taps set by SENS_AVG, datasheet '
+               'Rev. B) before the output register is read at a lower rate. Simulated: the '
+               'chain runs at decimation x the output rate, the kernel is applied causally '
+               '(delay (N-1) internal samples), every decimation-th sample is output. White '
+               'noise at the output then has lag-k autocorrelation sum_j h_j h_(j+kD) / '
+               'sum h^2, a short-tau Allan curve below the N line, and the long-tau N kept '
+               'at N sqrt(D sum_r H_r^2) (H_r: polyphase sums of h).')
+    PARAMS = {'taps': (4.0, 'samples', 'moving-average length N at the internal rate'),
+              'stages': (2.0, '-', 'cascaded averages (2: Bartlett triangle, 1: boxcar)'),
+              'decimation': (1.0, '-', 'internal samples per output sample'),
+              'accel': (1.0, '-', '1: accelerometers are filtered too')}
+
+    def check(self):
+        for key in ('taps', 'stages', 'decimation'):
+            if self.params[key] < 1 or self.params[key] != int(self.params[key]):
+                raise InputError(f'internal_lowpass: {key} must be a whole number >= 1')
+
+    def kernel(self) -> np.ndarray:
+        return bartlett_kernel(int(self.taps), int(self.stages))
+
+    def oversample(self, ctx):
+        return int(self.decimation)
+
+    def internal(self, ctx, gyro, accel):
+        h = self.kernel()
+        gyro = self._filter(h, gyro)
+        if self.accel:
+            accel = self._filter(h, accel)
+        return gyro, accel
+
+    @staticmethod
+    def _filter(h, x):
+        if h.size == 1:  # taps = 1: the identity (lfilter_zi needs a kernel of 2 or more)
+            return x * h[0]
+        # Start in steady state on the first sample so there is no start-up transient.
+        zi = signal.lfilter_zi(h, [1.0])[None, :] * x[:, :1]
+        y, _ = signal.lfilter(h, [1.0], x, axis=1, zi=zi)
+        return y
+
+    def noise_gain(self, decimation: int) -> float:
+        """Long-tau ARW gain of filter + decimation: sqrt(D sum_r H_r^2)."""
+        h = self.kernel()
+        d = int(decimation)
+        polyphase = np.array([h[r::d].sum() for r in range(d)])
+        return float(np.sqrt(d * np.sum(polyphase ** 2)))
+
+    def update_truth(self, ctx, truth):
+        gain = self.noise_gain(ctx.oversample)
+        names = IMU_CHANNELS if self.accel else GYRO_CHANNELS
+        for name in names:
+            if name in truth['channels']:
+                truth['channels'][name]['N'] *= gain
+
+
+@register
+class TemperatureDrift(Effect):
+    """Exponential bias warm-up after power-on."""
+
+    name = 'temperature_drift'
+    summary = 'bias transient settling exponentially while the sensor warms up'
+    physics = ('The die warms with a first-order thermal time constant and the bias follows '
+               'temperature linearly: bias(t) = bias + amplitude exp(-t / tau_s), settling to '
+               'the nominal bias. In a static record: a deterministic decay seen as a slope '
+               'at tau ~ tau_s in the Allan curve and a trend in the mean; in a swing run: a '
+               'drift the linear-drift state only partly absorbs.')
+    PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0'),
+              'tau_s': (600.0, 's', 'thermal time constant'),
+              'axis': _axis_param()}
+
+    def check(self):
+        _rows(self)
+        if self.tau_s <= 0:
+            raise InputError('temperature_drift: tau_s must be > 0')
+
+    def sensor(self, ctx, gyro, accel):
+        shape = self.amplitude * np.exp(-ctx.t / self.tau_s)
+        gyro = gyro.copy()
+        for r in _rows(self):
+            gyro[r] += shape
+        return gyro, accel
+
+
+class _NoiseTerm(Effect):
+    """An extra IEEE noise process from ``noise_gen`` on the selected gyro axes."""
+
+    term = ''
+
+    def check(self):
+        _rows(self)
+        if self.params[self.term] < 0:
+            raise InputError(f'{self.name}: {self.term} must be >= 0')
+
+    def sensor(self, ctx, gyro, accel):
+        gyro = gyro.copy()
+        rng = self.rng(ctx)
+        for r in _rows(self):
+            gyro[r] += noise_gen.generate(gyro.shape[1], ctx.dt_internal, rng=rng,
+                                          **{self.term: self.params[self.term]})
+        return gyro, accel
+
+    def update_truth(self, ctx, truth):
+        _add_truth_term(truth, _rows(self), self.term, self.params[self.term])
+
+
+@register
+class BiasInstability(_NoiseTerm):
+    """Flicker (1/f) bias noise."""
+
+    name = 'bias_instability'
+    term = 'B'
+    summary = 'flicker (1/f) bias noise: the flat Allan floor 0.664 B'
+    physics = ('1/f rate noise (Kasdin-Walter fractional integration, noise_gen): PSD '
+               'B^2 / (pi f), Allan variance 2 ln2 / pi B^2 (flat floor 0.664 B).')
+    PARAMS = {'B': (10.0 * DEG / 3600.0, 'rad/s', 'IEEE bias-instability coefficient'),
+              'axis': _axis_param()}
+
+
+@register
+class RateRandomWalk(_NoiseTerm):
+    """Random walk of the rate (integrated white noise)."""
+
+    name = 'rate_random_walk'
+    term = 'K'
+    summary = 'rate random walk: Allan slope +1/2, sigma^2 = K^2 tau / 3'
+    physics = ('Integrated white rate-acceleration noise: PSD K^2 / (2 pi f)^2, Allan '
+               'variance K^2 tau / 3.')
+    PARAMS = {'K': (1.0 * DEG / 3600.0, 'rad/s/sqrt(s)', 'IEEE rate-random-walk coefficient'),
+              'axis': _axis_param()}
+
+
+@register
+class GaussMarkov(Effect):
+    """Gauss-Markov (exponentially correlated) rate noise, first or second order."""
+
+    name = 'gauss_markov'
+    summary = 'exponentially correlated rate noise (a bump in the Allan curve near 1.9 tau_c)'
+    physics = ('x_k = a x_(k-1) + sigma sqrt(1 - a^2) w_k, a = exp(-dt / tau_s), stationary '
+               'from the first sample: autocorrelation sigma^2 exp(-|lag| / tau_s); Allan '
+               'variance (q tau_c^2 / tau) [1 - tau_c / (2 tau) (3 - 4 e^(-tau/tau_c) + '
+               'e^(-2 tau/tau_c))] with q = 2 sigma^2 / tau_c. order = 2: two such stages in '
+               'cascade (the critically damped second-order Gauss-Markov model, whose PSD '
+               'falls as f^-4 above 1 / (2 pi tau_s): a process with inertia, e.g. a '
+               'resonance-driven or twice-filtered disturbance), scaled to standard deviation '
+               'sigma, autocorrelation (1 + |lag| / tau_s) exp(-|lag| / tau_s) in the '
+               'continuous limit; also stationary from the first sample.')
+    PARAMS = {'sigma': (0.01 * DEG, 'rad/s', 'stationary standard deviation'),
+              'tau_s': (10.0, 's', 'correlation time'),
+              'axis': _axis_param(),
+              'order': (1.0, '-', '1: first order, 2: two first-order stages in cascade')}
+
+    def check(self):
+        _rows(self)
+        if self.sigma < 0 or self.tau_s <= 0:
+            raise InputError('gauss_markov: sigma >= 0 and tau_s > 0')
+        if self.order not in (1.0, 2.0):
+            raise InputError('gauss_markov: order must be 1 or 2')
+
+    def sensor(self, ctx, gyro, accel):
+        a = np.exp(-ctx.dt_internal / self.tau_s)
+        rng = self.rng(ctx)
+        gyro = gyro.copy()
+        n = gyro.shape[1]
+        for r in _rows(self):
+            w = rng.standard_normal(n)
+            if int(self.order) == 2:
+                gyro[r] += self.sigma * second_order_gm(a, w, rng)
+                continue
+            w[0] /= np.sqrt(1.0 - a * a)     # stationary start
+            x = signal.lfilter([1.0], [1.0, -a], w)
+            gyro[r] += self.sigma * np.sqrt(1.0 - a * a) * x
+        return gyro, accel
+
+
+def second_order_gm(a: float, w: np.ndarray, rng) -> np.ndarray:
+    """
+    Return unit-variance s2 of s1_k = a s1_(k-1) + w_k, s2_k = a s2_(k-1) + s1_k, stationary.
+
+    The initial state (s1_0, s2_0) is drawn from the cascade's stationary covariance (discrete
+    Lyapunov equation of A = [[a, 0], [a, a]], Q = [[1, 1], [1, 1]]), so no burn-in is needed
+    even for correlation times longer than the record.
+    """
+    v1 = 1.0 / (1.0 - a * a)
+    # P11 = v1, P12 = (a^2 v1 + 1) / (1 - a^2) = v1^2, P22 = (1 + a^2) / (1 - a^2)^3.
+    c12 = v1 * v1
+    v2 = v1 * v1 * v1 * (1.0 + a * a)
+    chol = np.linalg.cholesky(np.array([[v1, c12], [c12, v2]]))
+    s0 = chol @ rng.standard_normal(2)
+    s1 = signal.lfilter([1.0], [1.0, -a], w[1:], zi=[a * s0[0]])[0]
+    s2 = signal.lfilter([1.0], [1.0, -a], s1, zi=[a * s0[1]])[0]
+    return np.r_[s0[1], s2] / np.sqrt(v2)
+
+
+@register
+class AngleQuantization(Effect):
+    """Quantization of the integrated angle (a rate-integrating output): the IEEE Q term."""
+
+    name = 'quantization'
+    summary = 'angle (increment) quantization beyond dH: Allan slope -1, sigma^2 = 3 Q^2 / tau^2'
+    physics = ('The sensor accumulates angle and outputs whole counts of step_rad per sample: '
+               'rate_out = (C_k - C_(k-1)) step / dt with C_k = [theta_k / step]. The angle '
+               'error is uniform and white when the per-sample angle increments spread over at '
+               'least ~step/2 (rate noise N sqrt(dt) >= step / 2; otherwise it is correlated '
+               'and the -1 slope is not formed), so the rate gets the IEEE quantization term '
+               'Q = step / sqrt(12). dither = 1: a fresh uniform dither of one step is added '
+               'to the angle before each read-out, C_k = [theta_k / step + u_k] (body-dithered '
+               'ring-laser gyros, dithered counters): the angle error is then zero-mean and '
+               'white whatever the rate noise, of mean variance step^2 / 6, so Q = step / '
+               'sqrt(6).')
+    PARAMS = {'step_rad': (1.0e-5, 'rad', 'angle quantum'),
+              'axis': _axis_param(),
+              'dither': (0.0, '-', '1: one-step uniform dither before each read-out')}
+
+    def check(self):
+        _rows(self)
+        if self.step_rad <= 0:
+            raise InputError('quantization: step_rad must be > 0')
+        if self.dither not in (0.0, 1.0):
+            raise InputError('quantization: dither must be 0 or 1')
+
+    def output(self, ctx, gyro, accel):
+        gyro = gyro.copy()
+        rng = self.rng(ctx) if self.dither else None
+        for r in _rows(self):
+            theta = np.cumsum(gyro[r]) * ctx.dt / self.step_rad
+            if rng is not None:
+                theta += rng.uniform(0.0, 1.0, theta.size)
+            gyro[r] = np.diff(np.floor(theta), prepend=0.0) * (self.step_rad / ctx.dt)
+        return gyro, accel
+
+    def update_truth(self, ctx, truth):
+        q = self.step_rad / np.sqrt(6.0 if self.dither else 12.0)
+        _add_truth_term(truth, _rows(self), 'Q', q)
+
+
+@register
+class Vibration(Effect):
+    """A sinusoidal tone in the gyro output (mount vibration or an internal oscillation)."""
+
+    name = 'vibration'
+    summary = 'sinusoidal tone on gyro axes (e.g. the ADIS16405 Z-gyro tone near 17-21 Hz)'
+    physics = ('rate += amplitude sin(2 pi freq_hz t + phase), phase uniform random: a PSD '
+               'line of power amplitude^2 / 2 at freq_hz (aliased if above Nyquist of the '
+               'internal rate); Allan deviation oscillating below ~1/freq_hz.')
+    PARAMS = {'freq_hz': (19.0, 'Hz', 'tone frequency'),
+              'amplitude': (0.05 * DEG, 'rad/s', 'tone amplitude'),
+              'axis': _axis_param(2.0)}
+
+    def check(self):
+        _rows(self)
+        if self.freq_hz <= 0:
+            raise InputError('vibration: freq_hz must be > 0')
+
+    def sensor(self, ctx, gyro, accel):
+        phase = self.rng(ctx).uniform(0.0, 2.0 * np.pi)
+        tone = self.amplitude * np.sin(2.0 * np.pi * self.freq_hz * ctx.t + phase)
+        gyro = gyro.copy()
+        for r in _rows(self):
+            gyro[r] += tone
+        return gyro, accel
