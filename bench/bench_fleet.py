@@ -69,15 +69,20 @@ def main() -> None:
         out = root / f'out_w{workers}'
         cfg = FleetConfig(inputs=[str(data)], out=str(out), workers=workers, quiet=True,
                           job_options={'allan': f'--boot {args.boot}'})
+        load = os.getloadavg()[0]
         t0 = time.perf_counter()
         rc = run_fleet(cfg)
         walls[workers] = time.perf_counter() - t0
-        peaks = defaultdict(float)
+        peaks, cpu, busy = defaultdict(float), 0.0, 0.0
         for entry in (out / '.fleet-cache').glob('*.json'):
             e = json.loads(entry.read_text())
             peaks[e['pid']] = max(peaks[e['pid']], e['peak_rss'])
-        print(f'{workers} worker(s): {walls[workers]:7.1f} s wall (exit {rc}); peak RSS per '
-              f'worker: ' + ', '.join(f'{v / MB:.0f} MB' for v in sorted(peaks.values())))
+            cpu, busy = cpu + e['cpu_seconds'], busy + e['seconds']
+        print(f'{workers} worker(s): {walls[workers]:7.1f} s wall (exit {rc}); tasks: '
+              f'{busy:.1f} s wall, {cpu:.1f} s CPU (CPU / wall {cpu / busy:.2f}: below 1 when '
+              f'the workers wait for a core); load average before {load:.2f}')
+        rss = ', '.join(f'{v / MB:.0f} MB' for v in sorted(peaks.values()))
+        print(f'  peak RSS per worker: {rss}')
     single = single_command_rss(data / 'imu00', root / 'single', args.boot)
     print(f'one gyro-char allan process on one record: peak RSS {single / MB:.0f} MB')
     if 1 in walls and 2 in walls:

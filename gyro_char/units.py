@@ -66,6 +66,7 @@ def parse_unit(unit: str):
     ------
     ValueError
         On an unknown name or a malformed expression.
+
     """
     text = str(unit).strip().replace(' ', '').replace('**', '^').replace('√', 'sqrt')
     factor, dims, pos = _unit_product(text, 0)
@@ -124,6 +125,7 @@ def to_si(value: float, unit: str, si_unit: str) -> float:
     ------
     ValueError
         When ``unit`` cannot be read or is not a unit of the same kind as ``si_unit``.
+
     """
     factor, dims = parse_unit(unit)
     si_factor, si_dims = parse_unit(si_unit)

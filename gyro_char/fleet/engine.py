@@ -45,6 +45,7 @@ def connect(workers: Optional[int], scheduler: Optional[str]) -> Iterator:
     ------
     InputError
         When the scheduler cannot be reached.
+
     """
     client, cluster = _client(workers, scheduler)
     try:
@@ -75,7 +76,7 @@ def run_tasks(client, func: Callable, tasks: List[Tuple[str, Tuple]],
                 result = {'device': futures[fut][0], 'status': 'error',
                           'message': _describe(exc), 'measurements': [], 'files': {},
                           'log': '', 'cacheable': False, 'seconds': float('nan'),
-                          'peak_rss': 0, 'pid': 0, 'host': ''}
+                          'cpu_seconds': float('nan'), 'peak_rss': 0, 'pid': 0, 'host': ''}
             on_result(result)
             fut.release()
     except BaseException:

@@ -142,6 +142,7 @@ def discover(inputs: Sequence[str], default_kind: str) -> List[Device]:
     InputError
         On a missing input, a bad manifest, a directory without recordings, or two devices of
         one name.
+
     """
     named: List[Device] = []
     loose: List[Path] = []

@@ -47,6 +47,7 @@ def job_options(kind: str, text: str, overrides: Optional[Dict] = None) -> Dict:
     ------
     InputError
         On an option the command does not have or a bad value.
+
     """
     parser = _OptionParser(prog=f'--{kind}-options', add_help=False)
     job_module(kind).add_options(parser, require=False)
@@ -146,8 +147,8 @@ def finish(cfg: FleetConfig, planned: List[Planned], outcomes: Dict[str, Dict], 
         if spec is not None:
             verdict, reasons, passes = judge(spec, d.kind, o['status'], o['message'],
                                              o['measurements'])
-            for r, ok in zip(mine, passes or [False]):
-                r['pass'] = ok
+            for r, ok in zip(mine, passes if o['status'] == 'ok' else [False]):
+                r['pass'] = ok  # an error device's one row: False
             verdicts.append({'device': d.device, 'verdict': verdict, 'reasons': reasons})
         rows.extend(mine)
     columns = COLUMNS + (('pass',) if spec is not None else ())

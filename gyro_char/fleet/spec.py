@@ -77,6 +77,7 @@ def load_spec(path: str) -> Dict[str, Dict[str, Limit]]:
     InputError
         On a missing file, bad YAML, an unknown section, quantity or bound, or a unit that is
         not one of the quantity's kind.
+
     """
     try:
         with open(path) as fh:
@@ -140,12 +141,12 @@ def judge(spec, kind: str, status: str, message: str, rows: List[dict]):
     """
     Return ``(verdict, reasons, passes)`` of one device.
 
-    ``passes[i]`` is True / False for rows with a limit, None otherwise. A limit the record
-    cannot be checked against (e.g. accel limits on a gyro-only record) fails the device: a
-    datasheet promise that was not measured is not met.
+    ``passes[i]`` is True / False for rows with a limit, None otherwise (empty for a device in
+    error). A limit the record cannot be checked against (e.g. accel limits on a gyro-only
+    record) fails the device: a datasheet promise that was not measured is not met.
     """
     if status != 'ok':
-        return 'error', message, [False] * len(rows)
+        return 'error', message, []
     reasons, passes = [], []
     for row in rows:
         lim = limit_for(spec, kind, row['channel'], row['quantity'])

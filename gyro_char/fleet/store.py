@@ -89,8 +89,8 @@ class Store:
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
         if result.get('cacheable', False):
-            keep = ('device', 'status', 'message', 'measurements', 'seconds', 'peak_rss',
-                    'pid', 'host')
+            keep = ('device', 'status', 'message', 'measurements', 'seconds', 'cpu_seconds',
+                    'peak_rss', 'pid', 'host')
             entry = {k: result[k] for k in keep}
             entry.update(key=key, files=sorted(files))
             tmp = self._entry(device).with_suffix(f'.tmp-{uuid.uuid4().hex}')

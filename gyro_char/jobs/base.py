@@ -16,12 +16,12 @@ class Console:
 
     @property
     def out(self) -> TextIO:
-        """The result stream (``sys.stdout`` at the time of the call unless given)."""
+        """Return the result stream (``sys.stdout`` at the time of the call unless given)."""
         return self._out if self._out is not None else sys.stdout
 
     @property
     def err(self) -> TextIO:
-        """The note stream (``sys.stderr`` at the time of the call unless given)."""
+        """Return the note stream (``sys.stderr`` at the time of the call unless given)."""
         return self._err if self._err is not None else sys.stderr
 
 
