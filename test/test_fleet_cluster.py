@@ -65,16 +65,16 @@ def cluster(tmp_path_factory):
         for i in range(N_DEVICES):
             write_csv(data / f'imu{i}.csv', static_recording(2.0 + 0.2 * i, 10.0, seed=i,
                                                              duration=300.0))
-        yield {'address': address, 'client': client, 'data': data, 'tmp': tmp}
+        yield {'address': address, 'client': client, 'data': data, 'tmp': tmp,
+               'scheduler_file': sched_file}
         client.shutdown()  # scheduler and workers stop themselves
     finally:
         for p in procs[::-1]:
-            p.terminate()
-        for p in procs[::-1]:
             try:
-                p.wait(timeout=20)
+                p.wait(timeout=3)
             except subprocess.TimeoutExpired:
                 p.kill()
+                p.wait(timeout=20)
 
 
 def _outcomes(out):
@@ -130,8 +130,9 @@ def test_manifest_of_mixed_kinds_equals_the_single_commands(cluster, tmp_path):
     """
     Run allan, swing and diagnose devices in one batch, as their single commands would.
 
-    The swing period comes from the manifest; the diagnose device only shows that its options
-    reach the job (a diagnosis takes too long for a unit test).
+    The cluster is named by its scheduler file; the swing period comes from the manifest; the
+    diagnose device only shows that its options reach the job (a diagnosis takes too long for a
+    unit test).
     """
     data = tmp_path / 'data'
     data.mkdir()
@@ -143,8 +144,9 @@ def test_manifest_of_mixed_kinds_equals_the_single_commands(cluster, tmp_path):
                                         'stand1,data/stand1,swing,5.0,\n'
                                         'twin1,data/static1.csv,diagnose,,\n')
     out = tmp_path / 'out'
-    rc = main(['fleet', str(tmp_path / 'fleet.csv'), '--scheduler', cluster['address'],
-               '--out', str(out), '--diagnose-options=--repeats 3', '--quiet'])
+    rc = main(['fleet', str(tmp_path / 'fleet.csv'), '--scheduler',
+               str(cluster['scheduler_file']), '--out', str(out),
+               '--diagnose-options=--repeats 3', '--quiet'])
     assert rc == 3
     singles = {'static1': (['allan', str(data / 'static1.csv')],
                            ('noise.json', 'allan.json', 'imu.yaml', 'allan.png')),

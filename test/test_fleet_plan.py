@@ -2,6 +2,7 @@
 import csv
 import math
 
+from gyro_char.cli import main
 from gyro_char.errors import InputError
 from gyro_char.fleet.inputs import discover, fingerprint
 from gyro_char.fleet.run import job_options
@@ -154,3 +155,20 @@ def test_table_files_and_robust_z(tmp_path):
     write_parquet(str(tmp_path / 't.parquet'), rows, cols)
     table = pq.read_table(tmp_path / 't.parquet').to_pydict()
     assert table['value'] == [r['value'] for r in rows] and table['pass'][4] is False
+
+
+def test_bad_usage_exits_2_before_any_work(tmp_path, capsys):
+    _touch(tmp_path / 'recs' / 'a.csv')
+    (tmp_path / 'bad_spec.yaml').write_text('gyro: {N: {max: 3, unit: furlong}}\n')
+    out = tmp_path / 'out'
+    for argv, message in (
+            ([str(tmp_path / 'missing')], 'no such file or directory'),
+            ([str(tmp_path / 'recs'), '--allan-options=--nope 1'], 'unrecognized arguments'),
+            ([str(tmp_path / 'recs'), '--spec', str(tmp_path / 'bad_spec.yaml')],
+             "unknown unit 'furlong'"),
+            ([str(tmp_path / 'recs'), '--workers', '0'], '--workers must be >= 1')):
+        assert main(['fleet'] + argv + ['--out', str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith('gyro-char fleet: ') and message in err and len(
+            err.strip().splitlines()) == 1, err
+    assert not out.exists()  # nothing written, no cluster started

@@ -81,7 +81,7 @@ class Planned:
 
 
 def plan(cfg: FleetConfig) -> List[Planned]:
-    """Devices of the fleet with their options (bad usage raises InputError before any work)."""
+    """Return the devices with their options (bad usage raises InputError before any work)."""
     texts = cfg.job_options or {}
     for kind in KINDS:
         job_options(kind, texts.get(kind, ''))  # a bad option fails fast, whatever the inputs
@@ -114,7 +114,9 @@ def run_fleet(cfg: FleetConfig) -> int:
 
     def on_result(result: Dict) -> None:
         store.save(result, keys[result['device']])
-        outcomes[result['device']] = dict(result, cached=False)
+        # the files are on disk now: keep only the small part in memory
+        outcomes[result['device']] = {k: v for k, v in result.items()
+                                      if k not in ('files', 'log')}
         bar.update(1)
 
     if todo:
