@@ -85,8 +85,10 @@ def run_device(device: str, path: str, kind: str, options: Dict) -> Dict:
                     files[name] = fh.read()
     finally:
         shutil.rmtree(out, ignore_errors=True)
+    # the command's lines name its output directory: the device's, once the client wrote it
+    text = log.getvalue().replace(out, os.path.join('devices', device))
     return {'device': device, 'status': status, 'message': message,
-            'measurements': measurements, 'files': files, 'log': log.getvalue(),
+            'measurements': measurements, 'files': files, 'log': text,
             'cacheable': cacheable, 'seconds': time.perf_counter() - start,
             'cpu_seconds': time.process_time() - cpu, 'peak_rss': peak_rss_bytes(),
             'pid': os.getpid(), 'host': os.uname().nodename}
