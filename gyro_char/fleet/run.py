@@ -21,7 +21,7 @@ from gyro_char.fleet.spec import judge, limit_for, load_spec
 from gyro_char.fleet.store import cache_key, Store
 from gyro_char.fleet.table import (COLUMNS, device_rows, device_summaries, OUTLIER_Z,
                                    robust_z, VERDICT_COLUMNS, write_csv, write_parquet)
-from gyro_char.fleet.task import run_device
+from gyro_char.fleet.task import package_version, run_device
 from gyro_char.jobs import job_module, KINDS
 from gyro_char.jobs.base import is_upper_bound
 from gyro_char.progress import progress
@@ -112,7 +112,14 @@ def run_fleet(cfg: FleetConfig) -> int:
     bar = progress(total=len(planned), desc='devices', quiet=cfg.quiet, unit='device')
     bar.update(len(outcomes))
 
+    mine, warned = package_version(), set()
+
     def on_result(result: Dict) -> None:
+        theirs = result.get('version', mine)
+        if theirs != mine and theirs not in warned:  # e.g. a worker of an existing cluster
+            warned.add(theirs)
+            print(f'warning: a worker runs gyro_char {theirs}, this client {mine}: results '
+                  'may differ from the single command here', file=sys.stderr)
         store.save(result, keys[result['device']])
         # the files are on disk now: keep only the small part in memory
         outcomes[result['device']] = {k: v for k, v in result.items()

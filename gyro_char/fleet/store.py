@@ -16,24 +16,17 @@ from typing import Dict, Optional
 import uuid
 
 from gyro_char.fleet.inputs import fingerprint
+from gyro_char.fleet.task import package_version
 
 CACHE_DIR = '.fleet-cache'
 DEVICES_DIR = 'devices'
 LOG_NAME = 'log.txt'
 
 
-def _version() -> str:
-    try:
-        from importlib.metadata import version
-        return version('gyro_char')
-    except Exception:  # noqa: B902 - not installed as a distribution: the key still holds
-        return 'unknown'
-
-
 def cache_key(path: str, kind: str, options: Dict) -> str:
     """Key of one device's work: what would change its result."""
     blob = json.dumps({'path': str(Path(path).resolve()), 'input': fingerprint(path),
-                       'kind': kind, 'options': options, 'gyro_char': _version()},
+                       'kind': kind, 'options': options, 'gyro_char': package_version()},
                       sort_keys=True, default=str)
     return hashlib.sha256(blob.encode()).hexdigest()
 

@@ -25,6 +25,15 @@ from gyro_char.jobs import job_module
 from gyro_char.jobs.base import Console
 
 
+def package_version() -> str:
+    """Return the installed gyro_char version ('unknown' outside an installed distribution)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version('gyro_char')
+    except PackageNotFoundError:
+        return 'unknown'
+
+
 def peak_rss_bytes() -> int:
     """Peak resident memory of this process so far (bytes)."""
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -91,4 +100,4 @@ def run_device(device: str, path: str, kind: str, options: Dict) -> Dict:
             'measurements': measurements, 'files': files, 'log': text,
             'cacheable': cacheable, 'seconds': time.perf_counter() - start,
             'cpu_seconds': time.process_time() - cpu, 'peak_rss': peak_rss_bytes(),
-            'pid': os.getpid(), 'host': os.uname().nodename}
+            'pid': os.getpid(), 'host': os.uname().nodename, 'version': package_version()}
