@@ -1,4 +1,5 @@
 """The sensor filter in the noise fit: exact closed forms, specs, ``auto``, recovery, real data."""
+from bench_script import load
 from gyro_char.allan.compute import compute
 from gyro_char.allan.expected import (autocorrelation, avar_from_autocov, decimated_autocov,
                                       long_tau_density, markov_avar, moving_average_kernel,
@@ -7,9 +8,6 @@ from gyro_char.allan.fit import fit_result
 from gyro_char.allan.kernel import overlapping_avar
 from gyro_char.allan.sensor_filter import estimate, parse_spec, SensorFilter
 from gyro_char.errors import InputError
-from gyro_char.records import Recording
-from gyro_char.sim.config import BenchConfig
-from gyro_char.sim.simulator import simulate_static
 import numpy as np
 import pytest
 from scipy import signal
@@ -60,20 +58,7 @@ def test_specs():
             parse_spec(bad)
 
 
-def _record(taps, stages, dec, seed, duration=1800.0, flicker=False):
-    """Simulated static gyro_x at 100 Hz through internal_lowpass; return (rec, truth N)."""
-    noise = {'N': 2e-3, 'B': 0.0, 'K': 0.0, 'Q': 0.0, 'R': 0.0}
-    if flicker:
-        noise.update(B=6e-5, K=4e-6)
-    cfg = BenchConfig.from_preset('adis16405', {
-        'gyro': {'static_rate_hz': 100.0, 'output_step': 0.0, 'jitter_s': 0.0},
-        'noise': {'gyro_x': noise}})
-    effects = [] if taps == 1 else [{'name': 'internal_lowpass', 'params': {
-        'taps': float(taps), 'stages': float(stages), 'decimation': float(dec), 'accel': 0.0}}]
-    run = simulate_static(cfg, duration=duration, seed=seed, effects=effects,
-                          channels=('gyro_x',))
-    rec = Recording(run.imu.t, {'gyro_x': run.imu.channels['gyro_x']})
-    return rec, run.truth['channels']['gyro_x']['N']
+RECOVERY = load('sensor_filter_recovery')
 
 
 @pytest.mark.parametrize('kind,taps,dec,spec,flicker', [
@@ -81,21 +66,22 @@ def _record(taps, stages, dec, seed, duration=1800.0, flicker=False):
     ('boxcar', 3, 1, 'auto', True), ('bartlett', 4, 1, 'auto', False),
     ('boxcar', 1, 1, 'auto', True)], ids=lambda v: str(v))
 def test_auto_recovers_the_filter_and_n(kind, taps, dec, spec, flicker):
-    # Small version of bench/allan_sensor_filter.py: 30 min at 100 Hz from the simulator's
+    # Small version of bench/sensor_filter_recovery.py: 30 min at 100 Hz from the simulator's
     # internal_lowpass; auto finds the taps (the rate pinned where equivalent filters exist)
-    # and N over all tau is within 1 % of the truth; without the filter it is not.
-    rec, n_true = _record(taps, 2 if kind == 'bartlett' else 1, dec, seed=taps, flicker=flicker)
+    # and N over all tau ('l1w') is within 1 % of the truth; without the filter it is worse.
+    mix = RECOVERY.MIXES['white+flicker+rw' if flicker else 'white']
+    rec, n_true = RECOVERY.record(kind, taps, dec, taps, 1800.0, mix)
     res = compute(rec, sensor_filter=spec)
     choice = res.sensor_filters['gyro_x']
     if taps == 1:
         assert choice.sensor_filter is None and 'no smoothing' in choice.note
     else:
         assert choice.sensor_filter == SensorFilter(kind, taps, dec), choice.note
-    fit = fit_result(res, n_boot=10)['gyro_x']
+    fit = fit_result(res, n_boot=10, method='l1w')['gyro_x']
     assert fit.terms['N'].value == pytest.approx(n_true, rel=0.01)
     assert np.all(np.abs(np.sqrt(fit.model_avar(res.tau[:20]) / res.avar[:20, 0]) - 1) < 0.03)
     if taps > 1:
-        plain = fit_result(compute(rec), n_boot=10)['gyro_x']
+        plain = fit_result(compute(rec), n_boot=10, method='l1w')['gyro_x']
         assert abs(plain.terms['N'].value / n_true - 1.0) > abs(fit.terms['N'].value / n_true
                                                                 - 1.0)
 
@@ -106,7 +92,7 @@ def test_equivalent_filters_give_the_same_curve():
     a, b = SensorFilter('boxcar', 12, 8), SensorFilter('boxcar', 3, 2)
     tau = np.array([0.01, 0.02, 0.05, 1.0])
     assert np.allclose(a.white_avar(tau, 0.01), b.white_avar(tau, 0.01))
-    rec, _ = _record(12, 1, 8, seed=3, duration=600.0)
+    rec, _ = RECOVERY.record('boxcar', 12, 8, 3, 600.0)
     found, note = estimate(rec.channels['gyro_x'])
     assert found == b, note
 
