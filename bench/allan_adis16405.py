@@ -35,7 +35,7 @@ def main() -> None:
     ap.add_argument('--fit', choices=('l1', 'l1w', 'weighted'), default='l1')
     ap.add_argument('--sensor-filter', default='none')
     ap.add_argument('--markov', type=int, default=0)
-    ap.add_argument('--out', default=None, help='write each record\'s files in OUT/<record>')
+    ap.add_argument('--out', default=None, help='write the files of each record in OUT/<record>')
     args = ap.parse_args()
     print('N in deg/sqrt(h), B in deg/h. Paper (Table 2) X/Y/Z: N 1.890/1.648/1.463, '
           'B 36.95/31.06/30.72; datasheet N 2.0, B 25.2/0.664 = 38.0')
