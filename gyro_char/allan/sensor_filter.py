@@ -18,8 +18,10 @@ autocorrelation at small lags, which white noise dominates. Every candidate (box
 Bartlett, internal rates 1, 2, 4, 8, 16 x, taps up to 4 x the rate, one per distinct output
 autocorrelation) is fitted as scale x its exact aliased spectrum + a white angle (quantization)
 term, and scored by the mean |log residual| over the best 80 % of the bins (a tone or a
-resonance band does not decide). Candidates within ``TIE`` of the best are equivalent for
-the record; the simplest (lowest rate, then fewest taps) wins. The lag-1 correlation of the
+resonance band does not decide). Candidates within ``TIE`` x the score's estimation noise of
+the best are equivalent for the record; among them the one needing the least white angle
+term wins (a lag-1-only filter of too high a correlation can be pulled down by that term), then
+the lowest rate and the fewest taps. The lag-1 correlation of the
 record and of the chosen filter are both noted. When the best candidate does not beat no
 filter by ``GAIN_MIN`` (relative), or its lag-1 correlation is below ``RHO_MIN``, the record
 shows no smoothing and ``none`` is used, with a note.
