@@ -33,7 +33,7 @@ N_TRUE = 1e-3  # rad/sqrt(s)
 CROSSOVERS = (30.0, 100.0, 300.0, 1000.0, 3000.0)  # s: where K's line meets N's
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=False)  # cache files break when loaded both as a script and as a module
 def _kalman(y, q):  # pragma: no cover - compiled
     # Local level with var e = 1: returns (sum v^2 / F, sum log F) over t >= 1.
     mu, p = y[0], 1.0  # diffuse prior: after the first observation P = var e

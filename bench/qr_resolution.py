@@ -93,6 +93,10 @@ def plot(rows, path: str, title: str) -> None:
             b = [v for r, v in rows[h][t] if not r]
             a2.loglog([h] * len(b), b, marker, alpha=0.6, color='C0' if t == 'Q' else 'C1',
                       label=t if h == hours[0] or not a2.get_legend_handles_labels()[1] else None)
+    for ax in (a1, a2):
+        ax.set_xticks(hours)
+        ax.set_xticklabels([f'{h:g}' for h in hours])
+        ax.minorticks_off()
     a1.set_xlabel('record length [h]')
     a1.set_ylabel('share of records resolving the term')
     a1.set_ylim(-0.05, 1.05)
@@ -116,7 +120,7 @@ def main() -> None:
     ap.add_argument('--rate', type=float, default=100.0, help='sample rate, Hz')
     ap.add_argument('--seeds', type=int, default=6)
     ap.add_argument('--q-cross', type=float, default=0.005, help='tau where Q meets N (s)')
-    ap.add_argument('--r-cross', type=float, default=7200.0, help='tau where R meets K (s)')
+    ap.add_argument('--r-cross', type=float, default=1800.0, help='tau where R meets K (s)')
     ap.add_argument('--out', default='.', help='directory for qr_resolution.png')
     args = ap.parse_args()
     coeffs = truth(args.q_cross, args.r_cross)
