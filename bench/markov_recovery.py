@@ -78,9 +78,10 @@ def main() -> None:
         rows = recovery(sigma, tc, args.seeds, args.hours)
         kept = [r[0] for r in rows]
         ratio = np.array([r[1:] for r in rows], dtype=float)
-        print(f'  sigma {sigma:g} rad/s, T_c {tc:g} s: kept {kept}; T_c/truth '
-              f'{np.nanmin(ratio[:, 0]):.2f}..{np.nanmax(ratio[:, 0]):.2f}, sigma/truth '
-              f'{np.nanmin(ratio[:, 1]):.2f}..{np.nanmax(ratio[:, 1]):.2f}, N/truth '
+        found = ratio[np.isfinite(ratio[:, 0])]
+        ranges = (f'T_c/truth {found[:, 0].min():.2f}..{found[:, 0].max():.2f}, sigma/truth '
+                  f'{found[:, 1].min():.2f}..{found[:, 1].max():.2f}, ' if found.size else '')
+        print(f'  sigma {sigma:g} rad/s, T_c {tc:g} s: kept {kept}; {ranges}N/truth '
               f'{np.min(ratio[:, 2]):.4f}..{np.max(ratio[:, 2]):.4f}', flush=True)
     print(f'Part 2: records formula (4) describes, {args.hours:g} h at 50 Hz, {args.seeds} seeds')
     total, kept = 0, 0

@@ -134,6 +134,15 @@ def _select(design, tau, avar, edf, cov, method, markov):
     gain_min = np.array([GAIN_MIN] * len(TERMS) + [GAIN_MARKOV] * len(tcs))
     act_ext, z_ext = f_ext.select(z_full, gain_min, first=ext.markov_columns)
     kept = [i for i, j in enumerate(ext.markov_columns) if act_ext[j]]
+    if kept:
+        # Against formula (4)'s own selection (not nested when the Markov terms displaced a
+        # term): the Markov terms must gain GAIN_MARKOV x their null scales over it.
+        disp = f_ext.dispersion(z_ext)
+        cols = [ext.markov_columns[i] for i in kept]
+        scale = sum(f_ext.null_scale(z_ext, j, act_ext & (np.arange(act_ext.size) != j), disp)
+                    for j in cols)
+        if fitter.objective(z) - f_ext.objective(z_ext) < GAIN_MARKOV * scale:
+            kept = []
     if not kept:  # formula (4) explains the record: its own selection stands, unchanged
         return design, fitter, active, z
     final = FitDesign(design.dt, design.sensor_filter, tuple(tcs[i] for i in kept))

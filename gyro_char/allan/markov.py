@@ -12,10 +12,12 @@ correlation times are searched with all five terms of formula (4) free: each on 
 (``PER_DECADE`` a decade, from 3 x the shortest to a third of the longest fitted tau,
 ``SEPARATION`` apart), greedily, then refined between its grid neighbours. The Markov terms then
 enter the same backward elimination as the others, with the same statistic and threshold
-(``GAIN_MARKOV`` = ``GAIN_MIN``), and are dropped before any other weak term. When none
-survives, the result is formula (4)'s own selection, unchanged; when one does, the terms of
-formula (4) are those the joint elimination kept (a Markov bump can take over a bias-instability
-floor it explains better).
+(``GAIN_MARKOV`` = ``GAIN_MIN``), and are dropped before any other weak term. The survivors
+must then also beat formula (4)'s own selection (a comparison of non-nested models when they
+displaced a term: a Markov bump can stand in for a flicker floor): the objective must drop by
+``GAIN_MARKOV`` x the sum of their null scales. When no Markov term passes, the result is
+formula (4)'s own selection, unchanged; when one does, formula (4)'s terms are those the joint
+elimination kept.
 """
 from typing import Callable, List, Sequence
 
