@@ -53,7 +53,8 @@ def test_specs():
     auto = parse_spec('auto@8x')
     assert auto.mode == 'auto' and auto.decimation == 8
     assert parse_spec('bartlett:7@819.2').rate_hz == pytest.approx(819.2)
-    for bad in ('bartlett', 'auto:3', 'gauss:3', 'boxcar:0', 'boxcar:3@0.5x', 'none:2'):
+    for bad in ('bartlett', 'auto:3', 'gauss:3', 'boxcar:0', 'boxcar:3@0.5x', 'boxcar:3@100x',
+                'none:2'):
         with pytest.raises(InputError, match='sensor filter'):
             parse_spec(bad)
 

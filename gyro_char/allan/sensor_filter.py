@@ -23,7 +23,7 @@ the best are equivalent for the record; among them the one needing the least whi
 term wins (a lag-1-only filter of too high a correlation can be pulled down by that term), then
 the lowest rate and the fewest taps. The lag-1 correlation of the
 record and of the chosen filter are both noted. When the best candidate does not beat no
-filter by ``GAIN_MIN`` (relative), or its lag-1 correlation is below ``RHO_MIN``, the record
+filter by ``SCORE_GAIN`` (relative), or its lag-1 correlation is below ``RHO_MIN``, the record
 shows no smoothing and ``none`` is used, with a note.
 
 The Allan variance depends on the filter only through the output autocorrelation, so filters
@@ -47,7 +47,8 @@ SEGMENT = 256
 F_LOW = 0.02  # cycles per sample: bins below are left to flicker / random walk
 TRIM = 0.2
 TIE = 0.1
-GAIN_MIN = 0.25
+SCORE_GAIN = 0.25
+MAX_RATE = 64  # largest internal rate multiple accepted
 RHO_MIN = 0.02
 MIN_SAMPLES = 16 * SEGMENT
 
@@ -124,9 +125,9 @@ def parse_spec(text) -> FilterSpec:
         except ValueError:
             raise InputError(f'sensor filter {text!r}: bad rate {rate!r}') from None
         if unit == 'x' or unit is None and value == int(value) and value <= 64:
-            if value < 1 or value != int(value):
+            if not 1 <= value <= MAX_RATE or value != int(value):
                 raise InputError(f'sensor filter {text!r}: the rate multiple must be a whole '
-                                 'number >= 1')
+                                 f'number from 1 to {MAX_RATE}')
             dec = int(value)
         else:
             if not value > 0:
@@ -205,7 +206,7 @@ def estimate(x: np.ndarray, decimation: Optional[int] = None
     tol = TIE * np.sqrt(2.0 / np.pi) / np.sqrt(2.0 * x.size / SEGMENT)
     tied = [(q, c) for c, (s, q) in zip(cands, scored) if s <= best + tol]
     choice = min(tied, key=lambda v: (round(v[0], 3), v[1].decimation, v[1].taps))[1]
-    if (rho1 < RHO_MIN or best > (1.0 - GAIN_MIN) * none_score
+    if (rho1 < RHO_MIN or best > (1.0 - SCORE_GAIN) * none_score
             or choice.rho(1)[1] < RHO_MIN):
         return None, (f'the record shows no smoothing (lag-1 correlation {rho1:.3f}); '
                       'none used')
@@ -230,10 +231,19 @@ class FilterChoice:
         return out
 
 
+def _multiple(rate_hz: float, dt: float) -> int:
+    """Return the internal rate in Hz as a whole multiple of the output rate 1 / dt."""
+    dec = max(int(round(rate_hz * dt)), 1)
+    if dec > MAX_RATE:
+        raise InputError(f'sensor filter: internal rate {rate_hz:g} Hz is {rate_hz * dt:.4g} x '
+                         f'the output rate; at most {MAX_RATE} x is accepted')
+    return dec
+
+
 def _fixed(spec: FilterSpec, dt: float) -> FilterChoice:
     f = spec.sensor_filter
     if spec.rate_hz is not None:
-        f = SensorFilter(f.kind, f.taps, max(int(round(spec.rate_hz * dt)), 1))
+        f = SensorFilter(f.kind, f.taps, _multiple(spec.rate_hz, dt))
     return FilterChoice(f, 'user', f'{f.label} (given)')
 
 
@@ -246,7 +256,7 @@ def resolve(spec, x: np.ndarray, dt: float) -> FilterChoice:
         return _fixed(spec, dt)
     dec = spec.decimation
     if spec.rate_hz is not None:
-        dec = max(int(round(spec.rate_hz * dt)), 1)
+        dec = _multiple(spec.rate_hz, dt)
     found, note = estimate(x, dec)
     return FilterChoice(found, 'auto', f'auto: {note}')
 

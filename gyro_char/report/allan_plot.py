@@ -87,6 +87,10 @@ def table(fits: Dict[str, NoiseFit]) -> List[str]:
                 else:
                     cells.append(f'< {value:.3g}')
             lines.append(f'{name:9s}' + ''.join(f'{c:>26s}' for c in cells))
+            for m in fits[name].markov:  # IEEE 952 Annex C terms (--markov)
+                sigma = to_human('B', kind, m.sigma.value)
+                lines.append(f'{"":9s}Markov term: T_c {m.tau_c:.4g} s, sigma '
+                             f'{"" if m.sigma.resolved else "< "}{sigma:.4g} {units["B"][1]}')
         lines.append('')
     lines.append("value (68 % interval); '< x': term not resolved by the record, x is an upper "
                  'bound. B is the IEEE coefficient (flat floor of sigma = 0.664 B).')
