@@ -17,8 +17,15 @@ decimated sequence's own autocovariance). Normalised to unit long-tau density, i
 variance is 1 / tau at long tau, so the white term's coefficient N keeps its IEEE meaning (the
 long-tau angle random walk) whatever the filter.
 
-Pure numpy, no other project imports: the noise fit (``gyro_char.allan``) and the diagnosis's
-closed forms both use it.
+Also the Allan variance of IEEE 952 Annex C's exponentially correlated (first-order Markov)
+rate, ``markov_avar``. Pure numpy, no other project imports: for the noise fit
+(``gyro_char.allan.design``), the simulator's ``internal_lowpass`` kernel and any other
+closed-form expectation (e.g. the diagnosis's).
+
+API: ``moving_average_kernel`` (boxcar / Bartlett impulse response), ``decimated_autocov``
+(r(k) of white noise through h and decimation D), ``avar_from_autocov`` (sigma^2(m) from any
+finite autocovariance), ``long_tau_density`` (S), ``white_avar_unit`` (tau sigma^2 / N^2 of
+filtered white noise), ``autocorrelation`` (rho(k)), ``markov_avar``.
 """
 from typing import Sequence
 
