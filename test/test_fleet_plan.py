@@ -8,6 +8,8 @@ from gyro_char.fleet.inputs import discover, fingerprint
 from gyro_char.fleet.run import job_options
 from gyro_char.fleet.spec import judge, load_spec
 from gyro_char.fleet.table import device_summaries, robust_z, write_csv, write_parquet
+from gyro_char.jobs import allan_job
+from gyro_char.jobs.base import is_upper_bound
 from gyro_char.units import DEG, HUMAN_UNITS, SI_UNITS, to_si
 import pyarrow.parquet as pq
 import pytest
@@ -172,3 +174,17 @@ def test_bad_usage_exits_2_before_any_work(tmp_path, capsys):
         assert err.startswith('gyro-char fleet: ') and message in err and len(
             err.strip().splitlines()) == 1, err
     assert not out.exists()  # nothing written, no cluster started
+
+
+def test_allan_tidy_rows_include_markov_terms():
+    term = {'value': 1e-3, 'unit': 'rad/s^0.5', 'ci68': [0.9e-3, 1.1e-3], 'resolved': True}
+    bound = dict(term, ci68=None, resolved=False)
+    noise = {'gyro_x': {'N': term, 'B': bound, 'K': term, 'Q': bound, 'R': bound,
+                        'sensor_filter': {'kind': 'none'},
+                        'markov': [{'q': term, 'sigma': term,
+                                    'tau_c': {'value': 30.0, 'unit': 's'}}]}}
+    rows = {r['quantity']: r for r in allan_job.tidy(noise)}
+    assert list(rows) == ['N', 'B', 'K', 'Q', 'R', 'M1_q', 'M1_sigma', 'M1_tau_c']
+    assert rows['N']['lo68'] == 0.9e-3 and rows['N']['message'] == ''
+    assert is_upper_bound(rows['B']) and rows['B']['lo68'] is None
+    assert rows['M1_tau_c']['value'] == 30.0 and rows['M1_tau_c']['si_unit'] == 's'

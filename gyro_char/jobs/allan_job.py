@@ -88,21 +88,23 @@ def run(args, console: Optional[Console] = None) -> List[dict]:
         print(f'note: {note}', file=console.err)
     print('\n'.join(table(fits)), file=console.out)
     print(f'wrote {args.out}/allan.json, noise.json, imu.yaml, allan.png', file=console.out)
-    return tidy({n: f.to_json() for n, f in fits.items()})
+    return tidy({n: {**f.to_json(), **f.extra_json()} for n, f in fits.items()})
 
 
 def tidy(noise: dict) -> List[dict]:
     """
-    Tidy rows of noise.json's channels: every term with its 68 % interval.
+    Tidy rows of noise.json's channels: N, B, K, Q, R and the selected Markov terms.
 
-    An unresolved term (the record does not support it) is an upper bound: said in the row's
-    message.
+    Each with its 68 % interval; Markov term k gives ``M<k>_q``, ``M<k>_sigma`` and
+    ``M<k>_tau_c``. An unresolved term (the record does not support it) is an upper bound: said
+    in the row's message.
     """
     rows = []
-    for channel, terms in noise.items():
-        for term, t in terms.items():
-            if not isinstance(t, dict) or 'value' not in t:
-                continue
+    for channel, fields in noise.items():
+        terms = [(t, fields[t]) for t in ('N', 'B', 'K', 'Q', 'R') if t in fields]
+        for k, m in enumerate(fields.get('markov') or [], start=1):
+            terms += [(f'M{k}_{name}', m[name]) for name in ('q', 'sigma', 'tau_c') if name in m]
+        for term, t in terms:
             ci = t.get('ci68') or (None, None)
             note = '' if t.get('resolved', True) else UPPER_BOUND
             rows.append(measurement(channel, term, t['value'], t['unit'], ci[0], ci[1], note))
