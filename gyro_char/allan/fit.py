@@ -11,7 +11,7 @@ The reasoning is in docs/method.md, the measured accuracy in docs/validation.md.
 """
 import contextlib
 from dataclasses import dataclass, field
-from typing import Dict, Optional, Tuple
+from typing import Callable, Dict, Optional, Tuple
 
 from gyro_char.allan.edf import chi2_interval, chi2_ppf
 from gyro_char.allan.model import design_matrix, TERMS
@@ -238,13 +238,15 @@ def _draw_curves(p2, edf, cov, n, rng):
 
 def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: str = 'l1',
               tau_min: Optional[float] = None, tau_max: Optional[float] = None,
-              n_boot: int = N_BOOT, rng: Optional[np.random.Generator] = None) -> NoiseFit:
+              n_boot: int = N_BOOT, rng: Optional[np.random.Generator] = None,
+              interrupt: Optional[Callable[[], None]] = None) -> NoiseFit:
     """
     Fit formula (4) to one channel's curve; return values, 68 % intervals and ``resolved``.
 
     ``edf`` (K,) and ``alpha`` (K,) come from ``gyro_char.allan.edf``. The upper bound of an
     unresolved term is the largest coefficient whose term alone stays under the 95 % upper
-    bound of the Allan variance at every fitted tau.
+    bound of the Allan variance at every fitted tau. ``interrupt()``, when given, runs before
+    each bootstrap refit: a caller that must stop (a node shutting down) raises from it.
     """
     kind = sensor_kind(channel)
     tau, avar, edf = (np.asarray(v, dtype=np.float64) for v in (tau, avar, edf))
@@ -264,9 +266,12 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
     fitter = _Fitter(a_mat, avar_f, edf_f, cov, method)
     active, z = fitter.select(fitter.fit(np.ones(len(TERMS), dtype=bool)))
     rng = rng or np.random.default_rng(0)
-    boot = np.array([fitter.fit(active, curve, z0=z)
-                     for curve in _draw_curves(a_mat @ z, edf_f, cov, n_boot, rng)])
-    boot = np.sqrt(np.maximum(boot, 0.0))
+    boot = []
+    for curve in _draw_curves(a_mat @ z, edf_f, cov, n_boot, rng):
+        if interrupt is not None:
+            interrupt()
+        boot.append(fitter.fit(active, curve, z0=z))
+    boot = np.sqrt(np.maximum(np.array(boot), 0.0))
     coef = np.sqrt(np.maximum(z, 0.0))
     lo, hi = np.percentile(boot, [100 * 0.1587, 100 * 0.8413], axis=0)
     avar_hi = chi2_interval(np.sqrt(avar_f), edf_f, BOUND_CI)[1] ** 2
@@ -283,12 +288,14 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
 
 
 def fit_result(res, *, method: str = 'l1', tau_min: Optional[float] = None,
-               n_boot: int = N_BOOT, seed: int = 0) -> Dict[str, NoiseFit]:
-    """Fit every channel of an ``AllanResult`` (with EDF) and return {channel: NoiseFit}."""
+               n_boot: int = N_BOOT, seed: int = 0,
+               interrupt: Optional[Callable[[], None]] = None) -> Dict[str, NoiseFit]:
+    """Fit every channel of an ``AllanResult`` (with EDF); return {channel: NoiseFit}."""
     out = {}
     with threadpool_limits(1) if threadpool_limits is not None else contextlib.nullcontext():
         for c, name in enumerate(res.channels):
             out[name] = fit_noise(res.tau, res.avar[:, c], res.edf[:, c], res.alpha[:, c],
                                   channel=name, method=method, tau_min=tau_min,
-                                  n_boot=n_boot, rng=np.random.default_rng(seed + c))
+                                  n_boot=n_boot, rng=np.random.default_rng(seed + c),
+                                  interrupt=interrupt)
     return out
