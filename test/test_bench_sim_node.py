@@ -93,8 +93,8 @@ def test_parameters_are_validated(context):
         assert desc.description and desc.floating_point_range
     finally:
         node.destroy_node()
-    from gyro_char.errors import InputError
-    with pytest.raises(InputError):
+    from gyro_char.nodes.common import InvalidParameter
+    with pytest.raises(InvalidParameter, match='kind'):
         BenchSimNode(context=context, parameter_overrides=[Parameter('kind', value='moving')])
 
 
@@ -141,7 +141,7 @@ def test_separate_process_static_run_over_loopback(monkeypatch):
 
 
 @pytest.mark.parametrize('param,message', [
-    ('kind:=moving', b'kind must be swing or static'),
+    ('kind:=moving', b'kind must be one of'),
 ])
 def test_bad_parameter_exits_2(param, message):
     proc = subprocess.run(_node_cmd(param), env=ros_env(DOMAIN_CROSS_PROCESS),

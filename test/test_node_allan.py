@@ -24,7 +24,7 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
 DOMAIN_IN_PROCESS, DOMAIN_PROCESS = DOMAINS['allan']
-INPUTS = 'allan_node: inputs'
+INPUTS = '/allan_node: inputs'
 CHANNELS = ['gyro_x', 'gyro_y', 'gyro_z', 'accel_x', 'accel_y', 'accel_z']
 
 
@@ -100,14 +100,14 @@ def test_curve_and_noise_against_batch_and_truth(sim, tmp_path):
         assert np.all(data[:, 2] <= data[:, 1]) and np.all(data[:, 1] <= data[:, 3])
         # N of every gyro axis against the simulator's truth.
         for c in CHANNELS[:3]:
-            level, _, v = noise.last[f'allan_node: noise {c}']
+            level, _, v = noise.last[f'/allan_node: noise {c}']
             truth_n = sim.truth['channels'][c]['N']
             assert level == 0 and v['N_resolved'] == 1
             assert v['N_lo_rad_sqrt_s'] * 0.9 <= truth_n <= v['N_hi_rad_sqrt_s'] * 1.1, (v, c)
             assert v['samples'] == t.size
         assert spin_until(ex, lambda: 'files written' in node.fit_status, 30.0), node.fit_status
         noise_json = json.loads((tmp_path / 'out' / 'noise.json').read_text())
-        gx = noise.last['allan_node: noise gyro_x'][2]
+        gx = noise.last['/allan_node: noise gyro_x'][2]
         assert noise_json['channels']['gyro_x']['N']['value'] == pytest.approx(
             gx['N_rad_sqrt_s'], rel=1e-12)
         assert sorted(os.listdir(tmp_path / 'out')) == [
@@ -244,8 +244,8 @@ def test_kill_9_and_resume_loses_at_most_one_checkpoint_period(tmp_path):
             future = client.call_async(Trigger.Request())
             assert spin_until(ex, future.done, 20.0) and future.result().success
             noise = Listener(peer, ['/allan_node/noise'], LATCHED_1)
-            assert spin_until(ex, lambda: 'allan_node: noise gyro_x' in noise.last, 90.0)
-            v = noise.last['allan_node: noise gyro_x'][2]
+            assert spin_until(ex, lambda: '/allan_node: noise gyro_x' in noise.last, 90.0)
+            v = noise.last['/allan_node: noise gyro_x'][2]
             truth = read_json(summary)['truth']['channels']['gyro_x']['N']
             assert v['samples'] == final['samples']
             assert v['N_rad_sqrt_s'] == pytest.approx(truth, rel=0.1)
@@ -261,4 +261,6 @@ def test_invalid_startup_parameter_exits_2_with_the_reason():
     proc = subprocess.run(node_command('allan_node') + ['--ros-args', '-p', 'fit_method:=ols'],
                           env=ros_env(DOMAIN_PROCESS), capture_output=True, timeout=60)
     assert proc.returncode == 2
-    assert b'fit_method must be one of' in proc.stdout
+    assert proc.stderr.decode().strip().splitlines() == [
+        "allan_node: invalid parameter: fit_method must be one of ['l1', 'l1w', 'weighted'], "
+        "got 'ols'"]

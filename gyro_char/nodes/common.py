@@ -293,6 +293,7 @@ def run_node(factory: Callable[[], Any], name: str,
                 on_exit(node)
             node.destroy_node()
         rclpy.try_shutdown()
+        STOP.ignore_from_now()
     return code
 
 

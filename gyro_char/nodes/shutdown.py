@@ -44,6 +44,18 @@ class StopSignal:
                 signal.signal(sig, self._handle)
             self.installed = True
 
+    def ignore_from_now(self) -> None:
+        """
+        Ignore SIGINT and SIGTERM: the process has stopped and only has to exit.
+
+        The interpreter resets Python-level handlers to the default action while it exits, so
+        a repeated signal in that last moment would kill the process (exit -15); ignored
+        signals stay ignored.
+        """
+        if self.installed:
+            for sig in self.SIGNALS:
+                signal.signal(sig, signal.SIG_IGN)
+
     def _handle(self, signum: int, frame) -> None:
         self.request(signum)
         if self._interruptible:
