@@ -11,6 +11,7 @@ from gyro_char.allan.compute import compute
 from gyro_char.live.checkpoint import load_checkpoint
 from gyro_char.nodes.allan_node import AllanNode
 from gyro_char.nodes.common import LATCHED_1
+from gyro_char.records import Recording
 from gyro_char.sim.simulator import simulate_static
 from msg_adapters.diagnostics import parse_multiarray
 from node_harness import (
@@ -117,6 +118,31 @@ def test_curve_and_noise_against_batch_and_truth(sim, tmp_path):
         assert node.live.n_samples == 0
         assert not _call(ex, peer, '/allan_node/compute').success
         node.destroy_node()
+
+
+def test_channels_parameter_limits_what_is_accumulated_and_fitted(sim):
+    t, x = _sim_arrays(sim)
+    t, x = t[:8000], x[:8000]
+    chosen = ['gyro_z', 'accel_x']
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context, m_max=2 ** 12, fit_bootstrap=8,
+                                                  channels=chosen)
+        _publish(ex, node, feeder, t, x)
+        got = {}
+        peer.create_subscription(Float64MultiArray, '/allan_node/allan_curve',
+                                 lambda m: got.setdefault('curve', m), LATCHED_1)
+        noise = Listener(peer, ['/allan_node/noise'], LATCHED_1)
+        assert _call(ex, peer, '/allan_node/compute').success
+        assert spin_until(ex, lambda: 'curve' in got and noise.last, 60.0), node.fit_status
+        node.destroy_node()
+    data, labels = parse_multiarray(got['curve'])
+    assert labels[0] == ('channel', chosen)
+    # The same curve as the batch path on those channels of the same samples.
+    first = Recording(sim.imu.t[:8000], {c: sim.imu.channels[c][:8000] for c in chosen})
+    batch = compute(first, channels=chosen, m_max=2 ** 12)
+    k = min(batch.tau.size, data.shape[2])
+    np.testing.assert_allclose(data[:, 1, :k], batch.adev[:k].T, rtol=1e-9)
+    assert sorted(noise.last) == [f'/allan_node: noise {c}' for c in ('accel_x', 'gyro_z')]
 
 
 def test_bad_input_motion_and_gaps_reported(sim):
