@@ -196,3 +196,14 @@ def test_wait_for_subscribers_holds_the_first_sample(context):
     run = simulate_static(load(), duration=1.0, seed=0)
     assert len(imu) == len(run.imu)
     assert _stamp(imu[0]) == base + int(np.round(run.imu.t[0] * 1e9))
+
+
+def test_empty_effects_and_an_integer_duration_are_accepted(context):
+    node = BenchSimNode(context=context, parameter_overrides=[
+        Parameter('effects', value=[]), Parameter('duration_s', value=1),
+        Parameter('kind', value='static')])
+    try:
+        assert node.effects == [] and node.p['duration_s'] == 1.0
+        assert node.imu_t.size == simulate_static(load(), duration=1.0, seed=0).imu.t.size
+    finally:
+        node.destroy_node()

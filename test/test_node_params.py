@@ -12,7 +12,6 @@ import subprocess
 from node_harness import (
     clean_exit_problems, DOMAINS, make_executor, node_command, NodeProcess, ros_context,
     ros_env, spin_until)
-import pytest
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import GetParameters, SetParameters
 import rclpy
@@ -76,27 +75,36 @@ def _call(ex, node, srv_type, name, request):
     return future.result()
 
 
-@pytest.mark.parametrize('executable', sorted(ACCEPTED))
-def test_an_integer_is_taken_for_a_float(executable):
-    name, value = ACCEPTED[executable]
-    extra = ['-p', 'kind:=static'] if executable == 'bench_sim_node' else []
-    node = NodeProcess(executable, ['-p', f'{name}:={value}'] + extra, DOMAIN)
+def test_an_integer_is_taken_for_a_float():
+    nodes = {}
+    for executable, (name, value) in ACCEPTED.items():
+        extra = ['-p', 'kind:=static'] if executable == 'bench_sim_node' else []
+        nodes[executable] = NodeProcess(executable, ['-p', f'{name}:={value}'] + extra, DOMAIN)
     try:
         with ros_context(DOMAIN) as context:
             peer = rclpy.create_node('params_peer', context=context)
             ex = make_executor(context)
             ex.add_node(peer)
-            got = _call(ex, peer, GetParameters, f'/{executable}/get_parameters',
-                        GetParameters.Request(names=[name])).values[0]
-            assert got.type == ParameterType.PARAMETER_DOUBLE, node.output
-            assert got.double_value == float(value)
-            if executable != 'bench_sim_node':  # ros2 param set ... 3 at run time
+            for executable, (name, value) in ACCEPTED.items():
+                got = _call(ex, peer, GetParameters, f'/{executable}/get_parameters',
+                            GetParameters.Request(names=[name])).values[0]
+                assert got.type == ParameterType.PARAMETER_DOUBLE, nodes[executable].output
+                assert got.double_value == float(value)
+                if executable == 'bench_sim_node':
+                    continue  # duration_s is read-only
+                # ros2 param set <node> <name> <integer> at run time.
                 request = SetParameters.Request(
                     parameters=[Parameter(name, value=value + 1).to_parameter_msg()])
                 result = _call(ex, peer, SetParameters, f'/{executable}/set_parameters',
                                request).results[0]
                 assert result.successful, result.reason
+                got = _call(ex, peer, GetParameters, f'/{executable}/get_parameters',
+                            GetParameters.Request(names=[name])).values[0]
+                assert (got.type, got.double_value) == (ParameterType.PARAMETER_DOUBLE,
+                                                        float(value + 1))
             peer.destroy_node()
     finally:
-        node.stop(signal.SIGTERM)
-    assert clean_exit_problems(node) == [], node.output
+        for node in nodes.values():
+            node.stop(signal.SIGTERM)
+    for node in nodes.values():
+        assert clean_exit_problems(node) == [], node.output

@@ -136,8 +136,9 @@ def declare(node: Any, specs: Iterable[Param]) -> Dict[str, Any]:
         if reason:
             problems.append(reason)
             value = spec.default
-        if isinstance(value, list) and not value:  # no element type to declare with
-            node.declare_parameter(spec.name, Parameter.Type.STRING_ARRAY, spec.descriptor())
+        if isinstance(value, list) and not value:  # no element type: declared without a value
+            node.declare_parameter(spec.name, Parameter.Type.STRING_ARRAY, spec.descriptor(),
+                                   ignore_override=True)
         else:
             node.declare_parameter(spec.name, value, spec.descriptor(), ignore_override=True)
         values[spec.name] = value
