@@ -32,17 +32,23 @@ def _saved_samples(path) -> int:
     return sum(int(live[k]['n_samples']) for k in ('acc', 'pooled') if k in live)
 
 
-def _settled(listener, name: str, key: str, ex, timeout: float) -> dict:
-    """Spin until ``key`` of status ``name`` is unchanged over two reports; return the values."""
-    seen = []
+def _inputs(listener, node: str) -> str:
+    """Return the name of ``node``'s input status (its naming has its own tests)."""
+    return next((n for n in listener.last if n.endswith(f'{node}: inputs')), '')
+
+
+def _settled(ex, listener, node: str, key: str, timeout: float) -> dict:
+    """Spin until ``key`` of the node's input status is positive and equal in two reports."""
+    history = []
 
     def done():
-        v = listener.values(name)
-        if v is not None and (not seen or seen[-1] != v[key]):
-            seen.append(v[key])
-        return len(seen) >= 1 and listener.count.get(name, 0) >= len(seen) + 2
+        name = _inputs(listener, node)
+        count = listener.count.get(name, 0)
+        if count and (not history or history[-1][0] != count):
+            history.append((count, listener.values(name).get(key, 0)))
+        return len(history) >= 2 and history[-1][1] == history[-2][1] > 0
     assert spin_until(ex, done, timeout), listener.last
-    return listener.values(name)
+    return listener.values(_inputs(listener, node))
 
 
 @SIGNALS
@@ -66,7 +72,7 @@ def test_allan_node_stops_in_the_middle_of_a_fit(sig, tmp_path):
                 feeder.imu_sample(EPOCH + run.imu.t[k], x[k, :3], x[k, 3:])
                 if k % 200 == 199:
                     spin_until(ex, lambda: False, 0.01)
-            got = _settled(listener, '/allan_node: inputs', 'samples', ex, 20.0)
+            got = _settled(ex, listener, 'allan_node', 'samples', 20.0)
             assert got['samples'] > 0.9 * run.imu.t.size
             client = peer.create_client(Trigger, '/allan_node/compute')
             assert client.wait_for_service(timeout_sec=10.0)
@@ -121,7 +127,8 @@ def test_swing_kf_node_stops_while_taking_data(sig):
                     feeder.encoder_sample(t, -0.1 * np.cos(t))
                     k += 1
                 spin_until(ex, lambda: False, 0.02)
-            while (listener.values('/swing_kf_node: inputs') or {}).get('imu_accepted', 0) < 500:
+            while (listener.values(_inputs(listener, 'swing_kf_node')) or {}).get(
+                    'imu_accepted', 0) < 500:
                 assert k < 30000, (listener.last, node.output)
                 publish(50)
             node.proc.send_signal(sig)
