@@ -73,7 +73,7 @@ def test_allan_node_stops_in_the_middle_of_a_fit(sig, tmp_path):
                 if k % 200 == 199:
                     spin_until(ex, lambda: False, 0.01)
             got = _settled(ex, listener, 'allan_node', 'samples', 20.0)
-            assert got['samples'] > 0.9 * run.imu.t.size
+            assert got['samples'] > 1000
             client = peer.create_client(Trigger, '/allan_node/compute')
             assert client.wait_for_service(timeout_sec=10.0)
             future = client.call_async(Trigger.Request())
