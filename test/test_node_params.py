@@ -18,6 +18,7 @@ import rclpy
 from rclpy.parameter import Parameter
 
 DOMAIN = DOMAINS['params']
+NS = '/params_test'  # a namespace of our own: no other graph on the machine answers
 
 REFUSED = [
     ('allan_node', ['fit_bootstrap:=5000'],
@@ -79,14 +80,15 @@ def test_an_integer_is_taken_for_a_float():
     nodes = {}
     for executable, (name, value) in ACCEPTED.items():
         extra = ['-p', 'kind:=static'] if executable == 'bench_sim_node' else []
-        nodes[executable] = NodeProcess(executable, ['-p', f'{name}:={value}'] + extra, DOMAIN)
+        nodes[executable] = NodeProcess(executable, ['-r', f'__ns:={NS}', '-p', f'{name}:={value}']
+                                        + extra, DOMAIN)
     try:
         with ros_context(DOMAIN) as context:
             peer = rclpy.create_node('params_peer', context=context)
             ex = make_executor(context)
             ex.add_node(peer)
             for executable, (name, value) in ACCEPTED.items():
-                got = _call(ex, peer, GetParameters, f'/{executable}/get_parameters',
+                got = _call(ex, peer, GetParameters, f'{NS}/{executable}/get_parameters',
                             GetParameters.Request(names=[name])).values[0]
                 assert got.type == ParameterType.PARAMETER_DOUBLE, nodes[executable].output
                 assert got.double_value == float(value)
@@ -95,10 +97,10 @@ def test_an_integer_is_taken_for_a_float():
                 # ros2 param set <node> <name> <integer> at run time.
                 request = SetParameters.Request(
                     parameters=[Parameter(name, value=value + 1).to_parameter_msg()])
-                result = _call(ex, peer, SetParameters, f'/{executable}/set_parameters',
+                result = _call(ex, peer, SetParameters, f'{NS}/{executable}/set_parameters',
                                request).results[0]
                 assert result.successful, result.reason
-                got = _call(ex, peer, GetParameters, f'/{executable}/get_parameters',
+                got = _call(ex, peer, GetParameters, f'{NS}/{executable}/get_parameters',
                             GetParameters.Request(names=[name])).values[0]
                 assert (got.type, got.double_value) == (ParameterType.PARAMETER_DOUBLE,
                                                         float(value + 1))

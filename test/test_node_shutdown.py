@@ -25,6 +25,7 @@ DOMAIN = DOMAINS['shutdown']
 SIGNALS = pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM],
                                   ids=['SIGINT', 'SIGTERM'])
 CHANNELS = ('gyro_x', 'gyro_y', 'gyro_z', 'accel_x', 'accel_y', 'accel_z')
+NS = '/shutdown_test'  # a namespace of our own: no other graph on the machine answers
 
 
 def _saved_samples(path) -> int:
@@ -34,7 +35,8 @@ def _saved_samples(path) -> int:
 
 def _inputs(listener, node: str) -> str:
     """Return the name of ``node``'s input status (its naming has its own tests)."""
-    return next((n for n in listener.last if n.endswith(f'{node}: inputs')), '')
+    return next((n for n in listener.last if n in (f'{NS}/{node}: inputs', f'{node}: inputs')),
+                '')
 
 
 def _settled(ex, listener, node: str, key: str, timeout: float) -> dict:
@@ -57,11 +59,11 @@ def test_allan_node_stops_in_the_middle_of_a_fit(sig, tmp_path):
     x = np.column_stack([run.imu.channels[c] for c in CHANNELS])
     ck = tmp_path / 'allan.npz'
     node = NodeProcess('allan_node', [
-        '-p', f'checkpoint_path:={ck}', '-p', 'checkpoint_period_s:=3600.0',
+        '-r', f'__ns:={NS}', '-p', f'checkpoint_path:={ck}', '-p', 'checkpoint_period_s:=3600.0',
         '-p', 'm_max:=4096', '-p', 'fit_bootstrap:=1000', '-p', 'max_rate_hz:=0.0'], DOMAIN)
     try:
         with ros_context(DOMAIN) as context:
-            peer = rclpy.create_node('shutdown_allan_peer', context=context)
+            peer = rclpy.create_node('shutdown_allan_peer', context=context, namespace=NS)
             feeder = Feeder(peer, encoder=False)
             listener = Listener(peer, ['/diagnostics'])
             ex = make_executor(context)
@@ -74,7 +76,7 @@ def test_allan_node_stops_in_the_middle_of_a_fit(sig, tmp_path):
                     spin_until(ex, lambda: False, 0.01)
             got = _settled(ex, listener, 'allan_node', 'samples', 20.0)
             assert got['samples'] > 1000
-            client = peer.create_client(Trigger, '/allan_node/compute')
+            client = peer.create_client(Trigger, f'{NS}/allan_node/compute')
             assert client.wait_for_service(timeout_sec=10.0)
             future = client.call_async(Trigger.Request())
             assert spin_until(ex, future.done, 10.0) and future.result().success
@@ -107,10 +109,10 @@ def test_bench_sim_node_stops_while_generating_a_long_run(sig):
 
 @SIGNALS
 def test_swing_kf_node_stops_while_taking_data(sig):
-    node = NodeProcess('swing_kf_node', ['-p', 'max_rate_hz:=0.0'], DOMAIN)
+    node = NodeProcess('swing_kf_node', ['-r', f'__ns:={NS}', '-p', 'max_rate_hz:=0.0'], DOMAIN)
     try:
         with ros_context(DOMAIN) as context:
-            peer = rclpy.create_node('shutdown_swing_peer', context=context)
+            peer = rclpy.create_node('shutdown_swing_peer', context=context, namespace=NS)
             feeder = Feeder(peer)
             listener = Listener(peer, ['/diagnostics'])
             ex = make_executor(context)
