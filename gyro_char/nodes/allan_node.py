@@ -274,6 +274,11 @@ class AllanNode(Node):
         if thread is not None:
             thread.join()
 
+    def destroy_node(self) -> None:
+        """Cancel and join a running fit first: it publishes through this node."""
+        self.stop_fit()
+        super().destroy_node()
+
     def noise_message(self, res, fitted: Dict[str, Any]) -> DiagnosticArray:
         """Return one status per channel: N, B, K, Q, R (SI in the keys) with intervals."""
         statuses = []
