@@ -258,7 +258,8 @@ def publish_input_health(node: Any) -> None:
 
 def run_node(factory: Callable[[], Any], name: str,
              errors: Tuple[Type[BaseException], ...] = (),
-             on_exit: Optional[Callable[[Any], None]] = None, args=None) -> int:
+             on_exit: Optional[Callable[[Any], None]] = None, args=None,
+             executor_type: Optional[Callable[..., Any]] = None) -> int:
     """
     Run one node process: init, spin until SIGINT / SIGTERM, stop in order; the exit code.
 
@@ -267,7 +268,8 @@ def run_node(factory: Callable[[], Any], name: str,
     workers, write a last checkpoint), then the node and the context are torn down; exit 0.
     ``errors`` raised while building or spinning the node (a refused parameter, a bad config)
     and unusable ``--ros-args`` print one line ``<name>: <reason>`` on stderr; exit 2.
-    ``InvalidParameter`` is always one of them.
+    ``InvalidParameter`` is always one of them. ``executor_type(context=...)`` replaces
+    ``make_executor``'s choice.
     """
     STOP.install()
     try:
@@ -281,7 +283,7 @@ def run_node(factory: Callable[[], Any], name: str,
     try:
         if not STOP.is_set():
             node = factory()
-            spin(node)
+            spin(node, executor_type(context=node.context) if executor_type else None)
     except (Interrupted, KeyboardInterrupt, ExternalShutdownException):
         pass
     except (InvalidParameter, *errors) as exc:
