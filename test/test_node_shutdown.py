@@ -33,62 +33,80 @@ def _saved_samples(path) -> int:
     return sum(int(live[k]['n_samples']) for k in ('acc', 'pooled') if k in live)
 
 
-def _inputs(listener, node: str) -> str:
+def _inputs(listener, node: str, ns: str = NS) -> str:
     """Return the name of ``node``'s input status (its naming has its own tests)."""
-    return next((n for n in listener.last if n in (f'{NS}/{node}: inputs', f'{node}: inputs')),
+    return next((n for n in listener.last if n in (f'{ns}/{node}: inputs', f'{node}: inputs')),
                 '')
 
 
-def _settled(ex, listener, node: str, key: str, timeout: float) -> dict:
+def _settled(ex, listener, node: str, key: str, timeout: float, ns: str = NS) -> dict:
     """Spin until ``key`` of the node's input status is positive and equal in two reports."""
     history = []
 
     def done():
-        name = _inputs(listener, node)
+        name = _inputs(listener, node, ns)
         count = listener.count.get(name, 0)
         if count and (not history or history[-1][0] != count):
             history.append((count, listener.values(name).get(key, 0)))
         return len(history) >= 2 and history[-1][1] == history[-2][1] > 0
     assert spin_until(ex, done, timeout), listener.last
-    return listener.values(_inputs(listener, node))
+    return listener.values(_inputs(listener, node, ns))
 
 
-@SIGNALS
-def test_allan_node_stops_in_the_middle_of_a_fit(sig, tmp_path):
+def test_allan_node_stops_in_the_middle_of_a_fit(tmp_path):
+    """One node stopped with SIGINT, one with SIGTERM (in two namespaces, at the same time)."""
     run = simulate_static(duration=18.0, seed=2)
     x = np.column_stack([run.imu.channels[c] for c in CHANNELS])
-    ck = tmp_path / 'allan.npz'
-    node = NodeProcess('allan_node', [
-        '-r', f'__ns:={NS}', '-p', f'checkpoint_path:={ck}', '-p', 'checkpoint_period_s:=3600.0',
-        '-p', 'm_max:=4096', '-p', 'fit_bootstrap:=1000', '-p', 'max_rate_hz:=0.0'], DOMAIN)
+    cases = {signal.SIGINT: f'{NS}/int', signal.SIGTERM: f'{NS}/term'}
+    nodes, got = {}, {}
+    for sig, ns in cases.items():
+        nodes[sig] = NodeProcess('allan_node', [
+            '-r', f'__ns:={ns}', '-p', f'checkpoint_path:={tmp_path / f"{sig}.npz"}',
+            '-p', 'checkpoint_period_s:=3600.0', '-p', 'm_max:=4096',
+            '-p', 'fit_bootstrap:=1000', '-p', 'max_rate_hz:=0.0'], DOMAIN)
     try:
         with ros_context(DOMAIN) as context:
-            peer = rclpy.create_node('shutdown_allan_peer', context=context, namespace=NS)
-            feeder = Feeder(peer, encoder=False)
-            listener = Listener(peer, ['/diagnostics'])
+            peers = {sig: rclpy.create_node('shutdown_allan_peer', context=context, namespace=ns)
+                     for sig, ns in cases.items()}
+            feeders = {sig: Feeder(peer, encoder=False) for sig, peer in peers.items()}
+            listener = Listener(peers[signal.SIGINT], ['/diagnostics'])
             ex = make_executor(context)
-            ex.add_node(peer)
-            assert spin_until(ex, lambda: feeder.imu.get_subscription_count() > 0, 30.0), \
-                node.output
+            for peer in peers.values():
+                ex.add_node(peer)
+            assert spin_until(ex, lambda: all(f.imu.get_subscription_count() > 0
+                                              for f in feeders.values()), 30.0), [
+                n.output for n in nodes.values()]
             for k in range(run.imu.t.size):
-                feeder.imu_sample(EPOCH + run.imu.t[k], x[k, :3], x[k, 3:])
+                for feeder in feeders.values():
+                    feeder.imu_sample(EPOCH + run.imu.t[k], x[k, :3], x[k, 3:])
                 if k % 200 == 199:
                     spin_until(ex, lambda: False, 0.01)
-            got = _settled(ex, listener, 'allan_node', 'samples', 20.0)
-            assert got['samples'] > 1000
-            client = peer.create_client(Trigger, f'{NS}/allan_node/compute')
-            assert client.wait_for_service(timeout_sec=10.0)
-            future = client.call_async(Trigger.Request())
-            assert spin_until(ex, future.done, 10.0) and future.result().success
-            spin_until(ex, lambda: False, 0.5)  # the bootstrap (6 x 1000 refits) is running
-            peer.destroy_node()
-        elapsed = node.stop(sig)
+            futures = {}
+            for sig, ns in cases.items():
+                got[sig] = _settled(ex, listener, 'allan_node', 'samples', 20.0, ns)
+                assert got[sig]['samples'] > 1000
+                client = peers[sig].create_client(Trigger, f'{ns}/allan_node/compute')
+                assert client.wait_for_service(timeout_sec=10.0)
+                futures[sig] = client.call_async(Trigger.Request())
+            assert spin_until(ex, lambda: all(f.done() for f in futures.values()), 10.0)
+            assert all(f.result().success for f in futures.values())
+            spin_until(ex, lambda: False, 0.5)  # both bootstraps (6 x 1000 refits) are running
+            for sig, node in nodes.items():
+                node.proc.send_signal(sig)
+            start = time.monotonic()
+            for peer in peers.values():
+                peer.destroy_node()
+        for sig, node in nodes.items():
+            assert node.stop(sig, timeout=5.0) is not None, node.output  # a repeated signal
+        elapsed = time.monotonic() - start
     finally:
-        node.stop(signal.SIGKILL)
-    assert clean_exit_problems(node) == [], node.output
-    assert elapsed is not None and elapsed < 5.0, (elapsed, node.output)
-    assert 'fit cancelled' in node.output
-    assert _saved_samples(ck) == got['samples']
+        for node in nodes.values():
+            node.stop(signal.SIGKILL)
+    assert elapsed < 5.0
+    for sig, node in nodes.items():
+        assert clean_exit_problems(node) == [], node.output
+        assert 'fit cancelled' in node.output
+        assert _saved_samples(tmp_path / f'{sig}.npz') == got[sig]['samples']
 
 
 @SIGNALS
