@@ -28,7 +28,7 @@ import numpy as np
 # Effects a static record can reveal. (scale-factor, cross-axis, g-sensitivity, time delay and
 # encoder effects need motion or an encoder; a static record cannot tell them from bias.)
 STATIC_EFFECTS = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gauss_markov',
-                  'quantization', 'temperature_drift', 'vibration')
+                  'quantization', 'temperature_drift', 'vibration', 'resonance')
 TAU_REF = 1.0  # s, where N is read off the Allan curve
 NUISANCE = 'baseline_white_noise'  # pseudo-effect: scale on the baseline N, tuned per model
 PRESET = 'adis16405'  # only its structure is used: every number that matters is overridden
@@ -177,6 +177,12 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample),
             Param('freq_hz', 0.5 * f_tone, 1.5 * f_tone, log=False)],
             start={'freq_hz': f_tone} if tones.size else {}),
+        # A structural mode: band-limited noise around the same peak, of width f0 / q; its
+        # centre is searched (a resonance's largest Welch bin need not be its centre).
+        'resonance': EffectSpace('resonance', [
+            Param('sigma', 0.01 * sig_sample, 2.0 * sig_sample),
+            Param('freq_hz', 0.85 * f_tone, min(1.15 * f_tone, 0.45 / dt), log=False),
+            Param('q', 1.0, 300.0)]),
     }
     return [spaces[k] for k in names]
 
