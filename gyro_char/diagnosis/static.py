@@ -148,6 +148,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     # The most prominent narrow peak, however weak: if a tone is there at all, that is where.
     tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1)
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
+    df = 1.0 / (obs.welch_segment(n) * dt)
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
@@ -173,10 +174,12 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'temperature_drift': EffectSpace('temperature_drift', [
             Param('amplitude', 0.3 * sig_long, 3.0 * sig_sample, sign=warm_sign),
             Param('tau_s', length / 200, length / 2)]),
+        # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
+        # line between bins spreads its power differently from one on a bin).
         'vibration': EffectSpace('vibration', [
             Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample),
-            Param('freq_hz', 0.5 * f_tone, 1.5 * f_tone, log=False)],
-            start={'freq_hz': f_tone} if tones.size else {}),
+            Param('freq_hz', *((f_tone - 2.0 * df, f_tone + 2.0 * df) if tones.size
+                               else (0.5 * f_tone, 1.5 * f_tone)), log=False)]),
         # A structural mode: band-limited noise around the same peak, of width f0 / q; its
         # centre is searched (a resonance's largest Welch bin need not be its centre).
         'resonance': EffectSpace('resonance', [
