@@ -46,7 +46,7 @@ def timed(args) -> tuple:
 
 
 def simulated_record(directory: str, duration: float) -> str:
-    """A simulated static record (ADIS16405 preset, smoothing filter on) as a bag."""
+    """Simulate a static record (ADIS16405 preset, smoothing filter on) as a bag."""
     out = os.path.join(directory, 'sim')
     timed(['simulate', 'static', '--out', out, '--duration', str(duration), '--seed', '7',
            '--effect', 'internal_lowpass:taps=7,stages=2,decimation=8'])
