@@ -1,7 +1,7 @@
 """
 N and B of the real ADIS16405 static records, per axis, against the paper and the datasheet.
 
-Reads ``../shared/data/adis16405/*.csv.gz`` (never copied into the repository) and prints, per
+Reads the ADIS16405 ``*.csv.gz`` in shared/data beside the clone (never copied in) and prints, per
 record and gyro axis: the lag-1 autocorrelation of the samples, sigma(1 s) (the usual
 read-off of N), the flat floor min sigma / 0.664 (the read-off of B), and the fitted N, B of
 formula (4) (``--fit``, default the paper's L1 objective) over all taus and over tau >= 1 s

@@ -4,7 +4,8 @@ The swing filter on the real ADIS16405's noise: a known swing injected into real
 
     python bench/swing_real_noise.py [--axis x] [--window 900]
 
-Each real static record (../shared/data/adis16405, 100 Hz, 2.8 h) is cut into 15-min windows.
+Each real static ADIS16405 record (shared/data beside the clone, 100 Hz, 2.8 h) is cut into
+15-min windows.
 Into each window's gyro rate a swing of known scale-factor error is added,
 (1 + drho) A w cos(w t + psi0) with A = 20 deg, T = 5 s, drho = 0.5 %, psi0 random; the encoder
 is the same swing sampled at the IMU stamps with 5 urad white noise. The gyro's own errors are

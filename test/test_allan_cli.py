@@ -1,4 +1,4 @@
-"""``gyro-char allan``: output files per DESIGN.md section 4, and bad input -> exit 2."""
+"""``gyro-char allan``: output files per docs/design.md, and bad input -> exit 2."""
 import json
 
 from gyro_char.cli import main
@@ -13,7 +13,7 @@ TRUTH = {'gyro_x': {'N': 1e-3, 'B': 2e-4, 'Q': 3e-4}, 'gyro_y': {'N': 2e-3, 'K':
 
 
 def _write_csv(path, n=90_000, const=False):
-    # The CSV contract of DESIGN.md section 3 (written here, read by gyro_char's reader).
+    # The CSV contract of docs/design.md (written here, read by gyro_char's reader).
     rng = np.random.default_rng(1)
     cols = {'t_s': np.arange(n) * DT}
     for name, coeffs in TRUTH.items():

@@ -1,4 +1,4 @@
-# gyro-char diagnose: the diagnosis.json contract (DESIGN.md section 4), plots, bad input.
+# gyro-char diagnose: the diagnosis.json contract (docs/design.md), plots, bad input.
 import json
 
 from gyro_char.cli import main

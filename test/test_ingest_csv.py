@@ -1,4 +1,4 @@
-"""CSV ingest (DESIGN.md section 3) and the shared sanitiser, each case with a real file."""
+"""CSV ingest (docs/design.md) and the shared sanitiser, each case with a real file."""
 import gzip
 import math
 

@@ -1,6 +1,6 @@
 # The swing filter: the fast path (SRIF, batch and chunk-wise online) against the per-sample
 # filterpy Kalman filter on the same data, and the estimates against known truth. The data are
-# generated inline from the model equations of METHOD.md section 1 (unit tests of the filter;
+# generated inline from the model equations of docs/method.md section 1 (unit tests of the filter;
 # end-to-end runs on the bench simulator are in test_swing_sim.py).
 from pathlib import Path
 import sys
