@@ -191,6 +191,8 @@ def main(argv=None) -> int:
     ap.add_argument('--method', choices=('closed-form', 'twins'), default='closed-form')
     ap.add_argument('--held-out', action='store_true',
                     help='the held-out shapes (validate_diagnosis_heldout.py), no pairs')
+    ap.add_argument('--only', nargs='+', default=None, metavar='NAME',
+                    help='only these shapes (and no pairs, no clean records)')
     ap.add_argument('--repeats', type=int, default=6)
     ap.add_argument('--seeds', type=int, nargs='+', default=[11, 12])
     args, rest = ap.parse_known_args(argv)
@@ -208,8 +210,10 @@ def main(argv=None) -> int:
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
         import validate_diagnosis_heldout
         shapes = validate_diagnosis_heldout.shapes(DT, SIG, N_ARW)
-    for label, effects, seed in cases(args.quick, args.seeds, args.levels, shapes,
-                                      pairs=not args.held_out):
+    todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out)
+    if args.only:
+        todo = [c for c in todo if len(c[1]) == 1 and c[1][0][0] in args.only]
+    for label, effects, seed in todo:
         d = run_case(effects, n, seed, args.repeats, args.method, shapes)
         truth = [e for e, _ in effects]
         detected = d.baseline_gap > d.null_gap['q95']

@@ -134,6 +134,8 @@ def avar(spec: ModelSpectrum, g: Grids, parts=None) -> np.ndarray:
     if parts is None:
         for f0, power in spec.lines:
             x = f0 * dt
+            if np.sin(np.pi * x) ** 2 < 1e-12:
+                continue        # a line at DC: the record's line fit removes it
             out += power * 2.0 * np.sin(np.pi * x * g.m) ** 4 / (g.m ** 2 * np.sin(np.pi * x) ** 2)
     return out
 

@@ -153,6 +153,11 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
     k_long = sig_long / np.sqrt(tau_max)
+    # Upper bounds from the record itself as well: on a long record a strong random walk or
+    # flicker floor can sit far above 30x the white noise's Allan deviation at the longest tau.
+    adev_long = float(obs.overlapping_adev(y, np.array([obs.octave_m(n)[-1]]))[0])
+    b_hi = max(30.0 * sig_long, 3.0 * adev_long / 0.664)
+    k_hi = max(30.0 * k_long, 3.0 * adev_long * np.sqrt(3.0 / tau_max))
     spaces = {
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
         # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline.
@@ -160,11 +165,11 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
             fixed={'decimation': 8.0}),
         'bias_instability': EffectSpace('bias_instability', [
-            Param('B', 0.1 * sig_long, 30.0 * sig_long)]),
+            Param('B', 0.1 * sig_long, b_hi)]),
         'rate_random_walk': EffectSpace('rate_random_walk', [
-            Param('K', 0.1 * k_long, 30.0 * k_long)]),
+            Param('K', 0.1 * k_long, k_hi)]),
         'gauss_markov': EffectSpace('gauss_markov', [
-            Param('sigma', 0.1 * sig_long, 2.0 * sig_sample),
+            Param('sigma', 0.1 * sig_long, max(2.0 * sig_sample, 3.0 * adev_long)),
             Param('tau_s', 3 * dt, length / 4),
             Param('order', 1, 2, integer=True, choice=True)]),
         # Plain (angle error correlated when the step is coarse) or dithered (white error).
@@ -178,7 +183,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         # line between bins spreads its power differently from one on a bin).
         'vibration': EffectSpace('vibration', [
             Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample),
-            Param('freq_hz', *((f_tone - 2.0 * df, f_tone + 2.0 * df) if tones.size
+            Param('freq_hz', *((max(f_tone - 2.0 * df, df), f_tone + 2.0 * df) if tones.size
                                else (0.5 * f_tone, 1.5 * f_tone)), log=False)]),
         # A structural mode: band-limited noise around the same peak, of width f0 / q; its
         # centre is searched (a resonance's largest Welch bin need not be its centre).
