@@ -15,6 +15,7 @@ from gyro_char.diagnosis import gap as diag_gap
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis import static as ds
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
+from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.errors import InputError
 import numpy as np
@@ -96,6 +97,16 @@ def calibrate_n(base, x: np.ndarray):
     return replace(base, N=base.N * float(np.sqrt(ratio)))
 
 
+def white_band_spread(n: int, dt: float) -> float:
+    """Relative standard error of N from the median Welch level in 1-5 % of the rate."""
+    g = expected.grids(n, dt)
+    f = np.arange(g.nps // 2 + 1) / (g.nps * dt)
+    bins = int(np.count_nonzero((f >= 0.01 / dt) & (f <= 0.05 / dt)))
+    # Median of ~bins/2 independent chi-square(2 k_eff) bins (Hann neighbours correlate):
+    # relative spread 1.25 sqrt(1 / (k_eff bins / 2)); N goes as its square root.
+    return 0.5 * 1.25 / np.sqrt(max(g.k_eff * bins / 2.0, 1.0))
+
+
 def closed_form_problem(records, dt, *, channel='gyro_x', max_samples=None,
                         names=ds.STATIC_EFFECTS, base=None, twins=8, seed=1):
     """Build the static ``Problem`` with closed-form ``expect`` (see the module docstring)."""
@@ -110,6 +121,11 @@ def closed_form_problem(records, dt, *, channel='gyro_x', max_samples=None,
     if base is None:
         base = calibrate_n(ds.fit_baseline(recs[0], dt), recs[0])
     problem = ds.static_problem(recs, dt, channel=channel, names=names, base=base)
+    # N is re-tuned with every candidate within what the white-band level pins it to: +-5 %
+    # on long records, wider on short ones (a median over few Welch bins of few segments).
+    spread_n = white_band_spread(recs[0].size, dt)
+    width = max(0.05, 3.0 * spread_n)
+    problem.nuisance = EffectSpace(ds.NUISANCE, [Param('n_scale', 1.0 - width, 1.0 + width)])
     exp = StaticExpect(base, layouts)
     sims = [[problem.simulate(i, [], seed * 1000 + 700 + k) for k in range(twins)]
             for i in range(len(recs))]
