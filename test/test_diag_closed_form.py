@@ -98,3 +98,28 @@ def test_closed_form_diagnosis_names_smoothing_and_warm_up_on_a_simulated_record
     # The twins' residuals about the closed form have unit spread (the closed forms hold).
     for block, c in problem.check['records'][0].items():
         assert 0.5 < c['rms_residual'] < 1.6, (block, c)
+
+
+def test_two_records_and_a_holdout_at_full_length_through_the_command(tmp_path):
+    import json
+    from gyro_char.cli import main
+    paths = []
+    for k, n in enumerate((6000, 9000, 7000)):
+        rng = np.random.default_rng(60 + k)
+        t = np.arange(n) * DT
+        x = 0.4 * rng.standard_normal(n) + 0.2 * np.sin(2 * np.pi * 23.0 * t + k)
+        path = tmp_path / f'rec{k}.csv'
+        with open(path, 'w') as fh:
+            fh.write('t_s,gyro_x_dps\n')
+            fh.writelines(f'{a:.2f},{b:.2f}\n' for a, b in zip(t, np.round(x / 0.05) * 0.05))
+        paths.append(str(path))
+    out = tmp_path / 'out'
+    assert main(['diagnose', '--kind', 'static', paths[0], paths[1], '--holdout', paths[2],
+                 '--repeats', '4', '--check', '3', '--out', str(out), '--quiet']) == 0
+    d = json.loads((out / 'diagnosis.json').read_text())
+    assert [r['samples'] for r in d['analysed']['records']] == [6000, 9000]
+    assert d['analysed']['samples'] == 6000 and d['analysed']['duration_s'] == pytest.approx(60.0)
+    assert d['selected_effects'][:1] == ['vibration']
+    assert d['holdout']['analysed']['samples'] == 7000
+    assert d['holdout']['final_gap'] < 0.5 * d['holdout']['baseline_gap']
+    assert d['posterior_predictive']['repeats'] == 3

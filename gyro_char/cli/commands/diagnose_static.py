@@ -25,7 +25,7 @@ def add_static_options(p) -> None:
                         '(default) or on simulated twins (the earlier, slower path)')
     p.add_argument('--check', type=int, default=4, metavar='N',
                    help='static: simulated twins of the selected model that check the closed '
-                        'forms and the fit (default 4; 0: none)')
+                        'forms and the fit (default 4; 0: none; else at least 3)')
     p.add_argument('--scheduler', default=None, metavar='ADDRESS',
                    help='run the channels as tasks on this Dask scheduler (e.g. '
                         'tcp://127.0.0.1:8786); default: in this process')
@@ -149,8 +149,8 @@ def run_static(args, recs, dts, hold, channels, emit: Callable[[str], None]) -> 
     """Diagnose every channel of the static records; return ``{channel: json dict}``."""
     if args.max_samples is not None and args.max_samples < 1024:
         raise InputError('--max-samples must be >= 1024')
-    if args.check < 0:
-        raise InputError('--check must be >= 0')
+    if args.check < 0 or 0 < args.check < 3:
+        raise InputError('--check must be 0 (no check) or >= 3 (their scatter is compared)')
     opts = {'method': args.method, 'repeats': args.repeats, 'seed': args.seed,
             'max_samples': args.max_samples, 'check': args.check}
     tasks = [{'channel': ch, 'dt': dts[0], 'opts': opts,
