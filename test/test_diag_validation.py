@@ -2,7 +2,6 @@
 # the package catalogue does not have (Hann FIR, amplitude-modulated tone, white angle error),
 # not announced to the diagnosis; a clean baseline record must raise no effect.
 import bench_script
-import numpy as np
 
 
 def _harness():
