@@ -40,10 +40,15 @@ def test_allan_json(outputs):
     data = json.loads((outputs / 'allan.json').read_text())
     assert set(data) == {'channels'} and set(data['channels']) == set(TRUTH)
     for name, ch in data['channels'].items():
-        assert set(ch) == {'tau_s', 'adev', 'adev_lo', 'adev_hi', 'unit'}
+        assert set(ch) == {'tau_s', 'adev', 'adev_lo', 'adev_hi', 'adev_fit', 'unit'}
         assert ch['unit'] == ('rad/s' if name.startswith('gyro') else 'm/s^2')
         lo, mid, hi = (np.array(ch[k]) for k in ('adev_lo', 'adev', 'adev_hi'))
         assert len(ch['tau_s']) == len(mid) > 100 and np.all((lo < mid) & (mid < hi))
+        # adev_fit: the fitted model at every tau, within a factor 1.5 of the curve where
+        # the points are well determined (tau up to a tenth of the record)
+        fit = np.array(ch['adev_fit'])
+        well = np.array(ch['tau_s']) <= 180.0
+        assert fit.shape == mid.shape and np.all(np.abs(np.log(fit / mid))[well] < np.log(1.5))
     # white-noise level at tau = 1 s: N / sqrt(1 s)
     x = data['channels']['gyro_y']
     k = int(np.argmin(np.abs(np.array(x['tau_s']) - 1.0)))

@@ -123,3 +123,17 @@ def test_two_records_and_a_holdout_at_full_length_through_the_command(tmp_path):
     assert d['holdout']['analysed']['samples'] == 7000
     assert d['holdout']['final_gap'] < 0.5 * d['holdout']['baseline_gap']
     assert d['posterior_predictive']['repeats'] == 3
+
+
+def test_smoothing_filter_avar_equals_the_noise_fits_exact_autocovariance_form():
+    # An independent exact reference: the Allan variance of white noise through the FIR and
+    # decimation from its finite autocovariance (gyro_char.allan.expected).
+    from gyro_char.allan.expected import moving_average_kernel, white_avar_unit
+    n, big_n = 2 ** 16, 7e-4
+    g = expected.grids(n, DT)
+    for taps, stages, dec in ((7, 2, 8), (4, 3, 8), (5, 1, 2)):
+        spec = model_spectrum(big_n, 0.0, DT, [('internal_lowpass', {
+            'taps': float(taps), 'stages': float(stages), 'decimation': float(dec)})])
+        want = white_avar_unit(moving_average_kernel(taps, stages), dec, g.m) * big_n ** 2 \
+            / (g.m * DT)
+        np.testing.assert_allclose(expected.avar(spec, g), want, rtol=2e-3)

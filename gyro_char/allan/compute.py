@@ -14,14 +14,22 @@ de-duplicated, NaN rows dropped, all counted in ``notes``) this module decides:
 - Smaller jitter is treated as stamp noise on a uniformly clocked sensor (the sample values are
   used at their index); its rms is noted when above 5 % of dt.
 - A channel with no variation at all (constant signal) is refused: it has no noise to analyse.
+- Impulsive outliers (spikes) are looked for on every channel and counted in a note with their
+  share, largest size and the white noise they add to sigma^2 (``gyro_char.allan.spikes``);
+  ``despike`` replaces them by their neighbours' mean (opt in, counted).
+- The sensor's output filter for the noise fit (``gyro_char.allan.sensor_filter``: none, given,
+  or ``auto``, estimated on the longest gap-free run) is resolved per channel and noted.
 """
 from typing import List, Optional, Sequence, Tuple
 
+from gyro_char.allan import spikes
 from gyro_char.allan.edf import add_confidence, alpha_from_acf, alpha_from_slope
 from gyro_char.allan.kernel import (allan_sums, AllanResult, m_grid, phase, POINTS_PER_OCTAVE,
                                     pool, taus_to_m)
+from gyro_char.allan.sensor_filter import parse_spec, resolve
 from gyro_char.errors import InputError
 from gyro_char.records import ACCEL_CHANNELS, GYRO_CHANNELS, Recording
+from gyro_char.units import RATE_UNITS, sensor_kind
 import numpy as np
 
 GAP_FACTOR = 1.5
@@ -75,16 +83,45 @@ def default_channels(rec: Recording) -> List[str]:
     return [c for c in GYRO_CHANNELS + ACCEL_CHANNELS if c in rec.channels]
 
 
+def screen(data: np.ndarray, names: Sequence[str], dt: float, longest: Tuple[int, int],
+           sensor_filter='none', despike: bool = False) -> Tuple[dict, dict, List[str]]:
+    """
+    Find each channel's spikes (removed in place with ``despike``) and its sensor filter.
+
+    Return ({channel: FilterChoice}, {channel: SpikeReport}, notes). The filter (``none``,
+    given, or ``auto``: estimated on the longest gap-free run) is for the noise fit.
+    """
+    spec = parse_spec(sensor_filter)
+    a, b = longest
+    filters, reports, notes = {}, {}, []
+    for c, name in enumerate(names):
+        rep = spikes.detect(data[:, c], dt)
+        if rep.count and despike:
+            data[:, c] = spikes.remove(data[:, c], rep.index)
+            rep.removed = True
+        if rep.count:
+            notes.append(spikes.note(name, rep, RATE_UNITS[sensor_kind(name)]))
+        reports[name] = rep
+        choice = resolve(spec, data[a:b, c], dt)
+        if choice.note:
+            notes.append(f'allan: {name}: sensor filter {choice.note}')
+        filters[name] = choice
+    return filters, reports, notes
+
+
 def compute(rec: Recording, channels: Optional[Sequence[str]] = None,
             taus: Optional[Sequence[float]] = None, m_max: Optional[int] = None,
-            points_per_octave: int = POINTS_PER_OCTAVE) -> AllanResult:
+            points_per_octave: int = POINTS_PER_OCTAVE, sensor_filter='none',
+            despike: bool = False) -> AllanResult:
     """
     Return the overlapping Allan variance of ``rec`` with 68 % intervals.
 
     Noise type for the EDF: lag-1 ACF where the m-averaged series has >= 30 points, the local
     log-log slope of the curve beyond.
 
-    Grid: the paper's (optionally capped at ``m_max``) or the user's ``taus`` (s).
+    Grid: the paper's (optionally capped at ``m_max``) or the user's ``taus`` (s). Spikes are
+    always looked for and noted; ``despike`` replaces them. ``sensor_filter`` (a spec of
+    ``gyro_char.allan.sensor_filter``) is resolved per channel for the noise fit.
     """
     source = rec.source or 'recording'
     names = list(channels) if channels else default_channels(rec)
@@ -110,12 +147,14 @@ def compute(rec: Recording, channels: Optional[Sequence[str]] = None,
     m = (m_grid(longest, points_per_octave, m_max) if taus is None
          else taus_to_m(taus, dt, longest))
     a, b = max(segs, key=lambda s: s[1] - s[0])
+    filters, reports, screen_notes = screen(data, names, dt, (a, b), sensor_filter, despike)
     x_long = phase(data[a:b], dt)  # shared by the sums and the noise identification
     parts = [allan_sums(data[s0:s1], dt, m, names, x=x_long if (s0, s1) == (a, b) else None)
              for s0, s1 in segs if s1 - s0 >= 2]
     sums = pool(parts)
-    sums.notes = list(rec.notes) + notes
+    sums.notes = list(rec.notes) + notes + screen_notes
     res = sums.result()
+    res.sensor_filters, res.spikes = filters, reports
     alpha = alpha_from_acf(data[a:b], res.m, beyond=alpha_from_slope(res.tau, res.avar),
                            csum=x_long)
     return add_confidence(res, alpha)

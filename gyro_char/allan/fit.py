@@ -5,17 +5,24 @@ Estimators over z = [R^2, K^2, B^2, N^2, Q^2] >= 0 with p^2(tau) = A z: ``'l1'``
 log-domain L1), ``'l1w'`` (the same on EDF-standardised, median-unbiased logs) and
 ``'weighted'`` (EDF-weighted log least squares); solvers in ``gyro_char.allan.solvers``.
 68 % intervals come from a parametric bootstrap with the inter-tau correlation; terms are chosen
-by backward elimination judged by the estimator's own objective against a local dispersion, and
-a term the record does not support is reported as an upper bound (``resolved: false``).
+by backward elimination judged by the estimator's own objective against a local dispersion
+(``gyro_char.allan.selection``), and a term the record does not support is reported as an upper
+bound (``resolved: false``). Two extensions of the model (``gyro_char.allan.design``): the
+sensor's own filter in the white term (``gyro_char.allan.sensor_filter``), and IEEE 952 Annex C
+Markov terms where the record needs them (``gyro_char.allan.markov``).
 The reasoning is in docs/method.md, the measured accuracy in docs/validation.md.
 """
 import contextlib
 from dataclasses import dataclass, field
-from typing import Dict, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
+from gyro_char.allan.design import FitDesign
 from gyro_char.allan.edf import chi2_interval, chi2_ppf
-from gyro_char.allan.model import design_matrix, TERMS
-from gyro_char.allan.solvers import allan_cov, fit_l1, fit_weighted, L1Step
+from gyro_char.allan.markov import GAIN_MARKOV, MARKOV_MAX, search_tc
+from gyro_char.allan.model import TERMS
+from gyro_char.allan.selection import GAIN_MIN, TermFitter
+from gyro_char.allan.sensor_filter import filter_choices, FilterChoice
+from gyro_char.allan.solvers import allan_cov
 from gyro_char.units import sensor_kind, SI_UNITS
 import numpy as np
 from scipy import special
@@ -25,13 +32,8 @@ try:  # the 175 x 175 factorisations here are 20x slower with OpenBLAS threads o
 except ImportError:  # pragma: no cover - optional
     threadpool_limits = None
 
-SHARE_MIN = 0.3
 LO_MIN = 0.2
-GAIN_MIN = 4.0
-REL_MAX = 0.5
 BOUND_CI = 0.9
-R_INDEX = TERMS.index('R')
-K_INDEX = TERMS.index('K')
 N_BOOT = 100
 
 
@@ -49,6 +51,19 @@ class TermEstimate:
 
 
 @dataclass
+class MarkovEstimate:
+    """One selected Markov term: driving density q, rate sd sigma = q sqrt(T_c / 2), T_c."""
+
+    q: TermEstimate
+    sigma: TermEstimate
+    tau_c: float
+
+    def to_json(self) -> dict:
+        return {'q': self.q.to_json(), 'sigma': self.sigma.to_json(),
+                'tau_c': {'value': float(self.tau_c), 'unit': 's'}}
+
+
+@dataclass
 class NoiseFit:
     """IEEE coefficients of one channel (SI), with the curve they were fitted to."""
 
@@ -59,173 +74,33 @@ class NoiseFit:
     tau: np.ndarray
     avar: np.ndarray
     fitted: Dict[str, float] = field(default_factory=dict)  # point estimates, all terms
+    design: FitDesign = field(default_factory=FitDesign)
+    z: Optional[np.ndarray] = None  # squared coefficients of every design column
+    markov: List[MarkovEstimate] = field(default_factory=list)
+    sensor_filter: Optional[FilterChoice] = None
 
     def coeffs(self) -> Dict[str, float]:
-        """Return the point estimates actually used for the fitted curve (0 = absent)."""
+        """Return formula (4)'s point estimates used for the fitted curve (0 = absent)."""
         return dict(self.fitted)
+
+    def model_avar(self, tau) -> np.ndarray:
+        """Return the fitted model (every selected term, filter and Markov included) at tau."""
+        return self.design.matrix(tau) @ self.z
+
+    def term_avars(self, tau) -> Dict[str, np.ndarray]:
+        """Return each selected term's Allan variance at tau, by column name (N, M1, ...)."""
+        a_mat = self.design.matrix(tau)
+        return {name: a_mat[:, j] * self.z[j] for j, name in enumerate(self.design.names)
+                if self.z[j] > 0}
 
     def to_json(self) -> dict:
         return {t: self.terms[t].to_json() for t in ('N', 'B', 'K', 'Q', 'R')}
 
-
-class _Fitter:
-    """One channel's fitting problem: the estimator on any subset of the terms."""
-
-    def __init__(self, a_mat, avar, edf, cov, method):
-        self.a_mat, self.avar, self.edf, self.method = a_mat, avar, edf, method
-        self.sd = np.sqrt(special.polygamma(1, edf / 2.0))  # sd of ln sigma^2
-        corr = cov / np.outer(np.sqrt(np.diag(cov)), np.sqrt(np.diag(cov)))
-        self.corr = corr
-        if method == 'weighted':
-            self.noise_cov = cov  # of the log residuals
-        else:  # of their signs (Gaussian copula)
-            self.noise_cov = (2.0 / np.pi) * np.arcsin(np.clip(corr, -1.0, 1.0))
-        self.bias = special.digamma(edf / 2.0) - np.log(edf / 2.0)  # E ln(chi2_v / v)
-        self.steps = {}
-        # 'l1w': sigma^2 divided by the median of chi2(edf)/edf (an L1 fit is a median fit),
-        # residuals in units of the sd of ln sigma^2, sqrt(trigamma(edf / 2)).
-        self.l1_shift, self.l1_wts = 1.0, np.ones_like(avar)
-        if method == 'l1w':
-            self.l1_shift = edf / chi2_ppf(0.5, edf)
-            self.l1_wts = 1.0 / self.sd
-        self.log_l1 = np.log(avar * self.l1_shift)
-        self.log_ls = np.log(avar) - self.bias
-
-    def fit(self, active, curve=None, z0=None) -> np.ndarray:
-        curve = self.avar if curve is None else curve
-        a_act = self.a_mat[:, active]
-        key = tuple(active)
-        if key not in self.steps:
-            self.steps[key] = L1Step(a_act, self.avar)
-        z = np.zeros(self.a_mat.shape[1])
-        za = fit_l1(a_act, curve * self.l1_shift, None if z0 is None else z0[active],
-                    step=self.steps[key], wts=self.l1_wts)
-        if self.method == 'weighted':
-            za = fit_weighted(a_act, curve, self.edf, za)
-        z[active] = za
-        return z
-
-    def pointwise(self, z) -> np.ndarray:
-        """Return each point's term of the estimator's own objective (L1 or squares) at z."""
-        p = np.maximum(self.a_mat @ z, 1e-300)
-        if self.method == 'weighted':
-            return ((self.log_ls - np.log(p)) / self.sd) ** 2
-        return self.l1_wts * np.abs(self.log_l1 - np.log(p))
-
-    def objective(self, z) -> float:
-        """Return the estimator's own objective at z (L1 sum or weighted sum of squares)."""
-        return float(np.sum(self.pointwise(z))) if np.all(self.a_mat @ z > 0) else np.inf
-
-    def expected(self, n_par: int) -> np.ndarray:
-        """Return each point's expected objective term from estimation noise alone."""
-        n = self.avar.size
-        dof = max(n - n_par, 1) / n  # the fit absorbs n_par of the n residuals
-        if self.method == 'weighted':
-            return np.full(n, dof)
-        return self.l1_wts * self.sd * np.sqrt(2.0 / np.pi) * dof
-
-    def dispersion(self, z) -> np.ndarray:
-        """
-        Return each point's dispersion phi_k at the full fit z (>= 1, see the module doc).
-
-        Its objective term over the expected one, pooled over correlated neighbours (one
-        point alone is too noisy), never below 1.
-        """
-        d = self.pointwise(z) / self.expected(np.count_nonzero(z > 0))
-        return np.maximum(1.0, (self.corr @ d) / self.corr.sum(axis=1))
-
-    def null_scale(self, z, j, others, disp) -> float:
-        """
-        Return phi_j c_j: under "term j is absent" keeping it gains ~ phi_j c_j chi2_1.
-
-        Linearised at z: x = d ln p / d z_j residualised on the ``others`` columns in the
-        curvature metric; ``disp`` the per-point dispersion of the full fit, averaged with the
-        weights of the score of x (see the module docstring). 0 when j is redundant.
-        """
-        jac = self.a_mat / (self.a_mat @ z)[:, None]
-        if self.method == 'weighted':
-            wts = 1.0 / self.sd ** 2
-            curv = wts
-        else:
-            wts = self.l1_wts
-            curv = wts / (np.sqrt(2.0 * np.pi) * self.sd)
-        x = jac[:, j]
-        if np.any(others):
-            jo = jac[:, others]
-            coef = np.linalg.lstsq(jo * np.sqrt(curv)[:, None], x * np.sqrt(curv), rcond=None)[0]
-            x_res = x - jo @ coef
-        else:
-            x_res = x
-        quad = float(np.sum(curv * x_res ** 2))
-        if quad <= 1e-10 * float(np.sum(curv * x ** 2)):
-            return 0.0
-        wx = wts * x_res
-        if self.method == 'weighted':  # misfit scales each residual's sd by sqrt(phi_k)
-            wx = wx * np.sqrt(disp)
-            return float(wx @ self.noise_cov @ wx) / quad
-        # L1: signs are scale-free; misfit flattens the residual density, f_k -> f_k / phi_k
-        return float(wx @ self.noise_cov @ wx) / (4.0 * float(np.sum(curv * x_res ** 2 / disp)))
-
-    def select(self, z):
-        """
-        Backward elimination by the estimator's objective: return (active mask, z refitted).
-
-        Repeatedly drop the term whose removal (the others refitted) costs the least objective
-        in units of its null scale phi c_j, while that is below ``GAIN_MIN`` or the term never
-        reaches ``SHARE_MIN`` of the curve, unless the backstop of the module docstring keeps
-        it. Collinear pairs lose one member, not both. A random walk's chance trend looks like
-        a ramp at long tau, so among the weak terms R is dropped first: a ramp is reported only
-        when K cannot explain the bend.
-        """
-        # A term at zero in the estimator's optimum is absent: it may not re-enter when another
-        # is dropped (K dropped and a ramp R taking over would be a swap, not a simplification),
-        # except K when R is in: the random walk may take over the bend from a ramp.
-        allowed = z > 0
-        allowed[K_INDEX] |= allowed[R_INDEX]
-        obj_full = self.pointwise(z)
-        floor = np.maximum(obj_full, self.expected(np.count_nonzero(z > 0)))
-        disp = self.dispersion(z)
-        ones = np.ones_like(disp)
-        while np.count_nonzero(z > 0) > 1:
-            share = (self.a_mat * z) / (self.a_mat @ z)[:, None]
-            base = self.objective(z)
-            gains, fits = {}, {}
-            for j in np.flatnonzero(allowed & (z > 0)):
-                trial = allowed.copy()
-                trial[j] = False
-                fits[j] = self.fit(trial, z0=z)
-                obj_trial = self.pointwise(fits[j])
-                if share[:, j].max() < SHARE_MIN:
-                    gains[j] = -np.inf
-                    continue
-                others = trial & (z > 0)
-                gain = float(np.sum(obj_trial)) - base
-                scale = self.null_scale(z, j, others, disp)
-                gains[j] = gain / scale if scale > 0 else -np.inf  # redundant given the rest
-                # The backstop: a drop significant against pure noise (phi = 1) that raises
-                # the objective by half where the term matters, or doubles it overall, is a
-                # visible term, however large the misfit elsewhere makes phi. Not for R: a
-                # ramp beyond K lives in the last octave's few degrees of freedom, where a
-                # 50 % local rise is within chance; R is judged by the statistic alone.
-                rise = obj_trial - obj_full
-                where = share[:, j] >= SHARE_MIN
-                visible = (np.sum(rise) > np.sum(obj_full)
-                           or np.sum(rise[where]) > REL_MAX * np.sum(floor[where]))
-                if (j != R_INDEX and visible
-                        and gain > GAIN_MIN * self.null_scale(z, j, others, ones)):
-                    gains[j] = np.inf
-            weak = [j for j in gains if gains[j] < GAIN_MIN]
-            if not weak:
-                break
-            # A ramp is claimed only if the random walk cannot explain the bend: R goes first,
-            # also when K is the weak one (K and R are near-collinear at long tau; K dropped
-            # and R kept would claim a ramp on the strength of a random walk).
-            r_out = R_INDEX in gains and (R_INDEX in weak or K_INDEX in weak)
-            drop = R_INDEX if r_out else min(weak, key=gains.get)
-            allowed[drop] = False
-            z = fits[drop]
-        active = allowed & (z > 0)
-        return active, z
+    def extra_json(self) -> dict:
+        """Return noise.json's extra fields of the channel: the sensor filter, Markov terms."""
+        choice = self.sensor_filter or FilterChoice(None, 'none', '')
+        return {'sensor_filter': choice.to_json(),
+                'markov': [m.to_json() for m in self.markov]}
 
 
 def _draw_curves(p2, edf, cov, n, rng):
@@ -236,15 +111,60 @@ def _draw_curves(p2, edf, cov, n, rng):
     return p2 * chi2_ppf(u, edf) / edf
 
 
+def _select(design, tau, avar, edf, cov, method, markov):
+    """Return (design, fitter, active, z): formula (4), then with Markov terms if they stay."""
+    fitter = TermFitter(design.matrix(tau), avar, edf, cov, method)
+    active, z = fitter.select(fitter.fit(np.ones(len(TERMS), dtype=bool)))
+    if not markov:
+        return design, fitter, active, z
+
+    def extended(tcs):
+        ext = FitDesign(design.dt, design.sensor_filter, tuple(tcs))
+        f = TermFitter(ext.matrix(tau), avar, edf, cov, method)
+        return ext, f, f.fit(np.ones(len(ext.names), dtype=bool))
+
+    def score(tcs):
+        _, f, z_full = extended(tcs)
+        return f.objective(z_full)
+
+    tcs = search_tc(score, tau, markov)
+    if not tcs:
+        return design, fitter, active, z
+    ext, f_ext, z_full = extended(tcs)
+    gain_min = np.array([GAIN_MIN] * len(TERMS) + [GAIN_MARKOV] * len(tcs))
+    act_ext, z_ext = f_ext.select(z_full, gain_min, first=ext.markov_columns)
+    kept = [i for i, j in enumerate(ext.markov_columns) if act_ext[j]]
+    if kept:
+        # Against formula (4)'s own selection (not nested when the Markov terms displaced a
+        # term): the Markov terms must gain GAIN_MARKOV x their null scales over it.
+        disp = f_ext.dispersion(z_ext)
+        cols = [ext.markov_columns[i] for i in kept]
+        scale = sum(f_ext.null_scale(z_ext, j, act_ext & (np.arange(act_ext.size) != j), disp)
+                    for j in cols)
+        if fitter.objective(z) - f_ext.objective(z_ext) < GAIN_MARKOV * scale:
+            kept = []
+    if not kept:  # formula (4) explains the record: its own selection stands, unchanged
+        return design, fitter, active, z
+    final = FitDesign(design.dt, design.sensor_filter, tuple(tcs[i] for i in kept))
+    cols = list(range(len(TERMS))) + [ext.markov_columns[i] for i in kept]
+    fitter = TermFitter(final.matrix(tau), avar, edf, cov, method)
+    return final, fitter, act_ext[cols], z_ext[cols]
+
+
 def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: str = 'l1',
               tau_min: Optional[float] = None, tau_max: Optional[float] = None,
-              n_boot: int = N_BOOT, rng: Optional[np.random.Generator] = None) -> NoiseFit:
+              n_boot: int = N_BOOT, rng: Optional[np.random.Generator] = None,
+              dt: Optional[float] = None, sensor_filter: Optional[FilterChoice] = None,
+              markov: int = 0) -> NoiseFit:
     """
     Fit formula (4) to one channel's curve; return values, 68 % intervals and ``resolved``.
 
     ``edf`` (K,) and ``alpha`` (K,) come from ``gyro_char.allan.edf``. The upper bound of an
     unresolved term is the largest coefficient whose term alone stays under the 95 % upper
-    bound of the Allan variance at every fitted tau.
+    bound of the Allan variance at every fitted tau. ``sensor_filter`` (with ``dt``, the
+    sample interval) replaces the white term by the filter's exact one; ``markov`` is the
+    largest number of Markov terms searched (0, the default: formula (4) only; at most
+    ``MARKOV_MAX``).
     """
     kind = sensor_kind(channel)
     tau, avar, edf = (np.asarray(v, dtype=np.float64) for v in (tau, avar, edf))
@@ -256,13 +176,18 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
         sel &= tau <= tau_max
     if np.count_nonzero(sel) < 3:
         raise ValueError(f'{channel}: fewer than 3 usable tau points to fit')
-    tau_f, avar_f, edf_f, alpha_f = tau[sel], avar[sel], edf[sel], alpha[sel]
-    a_mat = design_matrix(tau_f)
-    cov = allan_cov(tau_f, edf_f, alpha_f)
+    if method == 'l1-raw':  # earlier name of the same (uncorrected) paper objective
+        method = 'l1'
     if method not in ('l1', 'l1w', 'weighted'):
         raise ValueError(f'unknown fit method {method!r}')
-    fitter = _Fitter(a_mat, avar_f, edf_f, cov, method)
-    active, z = fitter.select(fitter.fit(np.ones(len(TERMS), dtype=bool)))
+    tau_f, avar_f, edf_f, alpha_f = tau[sel], avar[sel], edf[sel], alpha[sel]
+    cov = allan_cov(tau_f, edf_f, alpha_f)
+    filt = sensor_filter.sensor_filter if sensor_filter is not None else None
+    if not 0 <= int(markov) <= MARKOV_MAX:
+        raise ValueError(f'markov must be 0..{MARKOV_MAX}, got {markov}')
+    design, fitter, active, z = _select(FitDesign(dt, filt), tau_f, avar_f, edf_f, cov,
+                                        method, int(markov))
+    a_mat = fitter.a_mat
     rng = rng or np.random.default_rng(0)
     boot = np.array([fitter.fit(active, curve, z0=z)
                      for curve in _draw_curves(a_mat @ z, edf_f, cov, n_boot, rng)])
@@ -270,25 +195,42 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
     coef = np.sqrt(np.maximum(z, 0.0))
     lo, hi = np.percentile(boot, [100 * 0.1587, 100 * 0.8413], axis=0)
     avar_hi = chi2_interval(np.sqrt(avar_f), edf_f, BOUND_CI)[1] ** 2
-    terms = {}
-    for j, t in enumerate(TERMS):
+
+    def estimate(j, unit, factor=1.0):
         if active[j] and lo[j] > LO_MIN * coef[j]:
-            terms[t] = TermEstimate(float(coef[j]), SI_UNITS[kind][t],
-                                    (float(lo[j]), float(hi[j])), True)
-        else:
-            bound = float(np.sqrt(np.min(avar_hi / a_mat[:, j])))
-            terms[t] = TermEstimate(bound, SI_UNITS[kind][t], None, False)
+            return TermEstimate(float(coef[j] * factor), unit,
+                                (float(lo[j] * factor), float(hi[j] * factor)), True)
+        bound = float(np.sqrt(np.min(avar_hi / a_mat[:, j])))
+        return TermEstimate(bound * factor, unit, None, False)
+
+    terms = {t: estimate(j, SI_UNITS[kind][t]) for j, t in enumerate(TERMS)}
+    rate = SI_UNITS[kind]['B']
+    markov_terms = [MarkovEstimate(estimate(j, SI_UNITS[kind]['K']),
+                                   estimate(j, rate, float(np.sqrt(tc / 2.0))), tc)
+                    for j, tc in zip(design.markov_columns, design.markov_tc)]
     return NoiseFit(channel=channel, kind=kind, method=method, terms=terms, tau=tau_f,
-                    avar=avar_f, fitted=dict(zip(TERMS, (float(c) for c in coef))))
+                    avar=avar_f, fitted=dict(zip(TERMS, (float(c) for c in coef))),
+                    design=design, z=np.maximum(z, 0.0), markov=markov_terms,
+                    sensor_filter=sensor_filter)
 
 
 def fit_result(res, *, method: str = 'l1', tau_min: Optional[float] = None,
-               n_boot: int = N_BOOT, seed: int = 0) -> Dict[str, NoiseFit]:
-    """Fit every channel of an ``AllanResult`` (with EDF) and return {channel: NoiseFit}."""
+               n_boot: int = N_BOOT, seed: int = 0, sensor_filter=None,
+               markov: int = 0) -> Dict[str, NoiseFit]:
+    """
+    Fit every channel of an ``AllanResult`` (with EDF) and return {channel: NoiseFit}.
+
+    ``sensor_filter``: None uses the filters ``gyro_char.allan.compute.compute`` resolved
+    (``res.sensor_filters``; none when absent), or a spec (``'bartlett:7@8x'``; ``'auto'``
+    needs the samples, so it is resolved by ``compute``) for every channel.
+    """
+    choices = filter_choices(res, sensor_filter)
     out = {}
     with threadpool_limits(1) if threadpool_limits is not None else contextlib.nullcontext():
         for c, name in enumerate(res.channels):
             out[name] = fit_noise(res.tau, res.avar[:, c], res.edf[:, c], res.alpha[:, c],
                                   channel=name, method=method, tau_min=tau_min,
-                                  n_boot=n_boot, rng=np.random.default_rng(seed + c))
+                                  n_boot=n_boot, rng=np.random.default_rng(seed + c),
+                                  dt=res.dt, sensor_filter=choices.get(name),
+                                  markov=markov)
     return out

@@ -191,6 +191,10 @@ class AllanResult:
     alpha: Optional[np.ndarray] = None
     adev_lo: Optional[np.ndarray] = None
     adev_hi: Optional[np.ndarray] = None
+    # per channel, filled by ``gyro_char.allan.compute.compute``: the sensor filter for the
+    # noise fit (``sensor_filter.FilterChoice``) and the spikes found (``spikes.SpikeReport``)
+    sensor_filters: Optional[dict] = None
+    spikes: Optional[dict] = None
 
     @property
     def adev(self) -> np.ndarray:

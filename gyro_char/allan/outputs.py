@@ -4,17 +4,43 @@ The text outputs of an Allan analysis: ``allan.json`` and Kalibr's ``imu.yaml``.
 Both the ``gyro-char allan`` command and ``allan_node`` write them (through
 ``gyro_char.report.allan_outputs.write_outputs``), so the two front doors give the same files.
 """
-from gyro_char.units import RATE_UNITS, sensor_kind
+from gyro_char.units import RATE_UNITS, sensor_kind, SI_UNITS
+import numpy as np
 
 
-def allan_json(res) -> dict:
-    """Return allan.json (docs/design.md) of an ``AllanResult`` with intervals."""
+def allan_json(res, fits=None) -> dict:
+    """
+    Return allan.json (docs/design.md) of an ``AllanResult`` with intervals.
+
+    ``fits`` ({channel: NoiseFit}) adds ``adev_fit``: the fitted model (every selected term,
+    sensor filter and Markov terms included) at every tau; null for a channel without a fit.
+    """
     out = {}
     for c, name in enumerate(res.channels):
         out[name] = {'tau_s': res.tau.tolist(), 'adev': res.adev[:, c].tolist(),
                      'adev_lo': res.adev_lo[:, c].tolist(),
                      'adev_hi': res.adev_hi[:, c].tolist(),
                      'unit': RATE_UNITS[sensor_kind(name)]}
+        if fits is not None:
+            fit = fits.get(name)
+            out[name]['adev_fit'] = (None if fit is None
+                                     else np.sqrt(fit.model_avar(res.tau)).tolist())
+    return {'channels': out}
+
+
+def noise_json(fits, spikes=None) -> dict:
+    """
+    Return noise.json (docs/design.md): N, B, K, Q, R per channel, plus extra fields.
+
+    Extra fields of a channel: ``sensor_filter`` (the filter the fit used), ``markov`` (the
+    selected Markov terms) and, when ``spikes`` ({channel: SpikeReport}) is given, ``spikes``.
+    """
+    out = {}
+    for name, fit in fits.items():
+        out[name] = {**fit.to_json(), **fit.extra_json()}
+        rep = (spikes or {}).get(name)
+        if rep is not None:
+            out[name]['spikes'] = rep.to_json(RATE_UNITS[fit.kind], SI_UNITS[fit.kind]['N'])
     return {'channels': out}
 
 

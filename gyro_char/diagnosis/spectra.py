@@ -18,7 +18,8 @@ for one model; every observable's expectation is a linear functional of it
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence, Tuple
 
-from gyro_char.sim.effects.sensor import bartlett_kernel, resonance_coefficients
+from gyro_char.allan.expected import moving_average_kernel
+from gyro_char.sim.effects.sensor import resonance_coefficients
 import numpy as np
 
 # Effects whose static output has a closed form here.
@@ -174,7 +175,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
         if name == 'internal_lowpass':
             decim = max(decim, int(p.get('decimation', 1.0)))
             taps, stages = int(p['taps']), int(p.get('stages', 2.0))
-    h = bartlett_kernel(taps, stages)
+    h = moving_average_kernel(taps, stages)
     gain = float(np.sqrt(decim * np.sum([h[r::decim].sum() ** 2 for r in range(decim)])))
     dt_i = dt / decim
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,

@@ -17,13 +17,15 @@ import time
 from typing import Any, Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from gyro_char.allan.sensor_filter import parse_spec
 from gyro_char.errors import InputError
 from gyro_char.live.allan_live import AllanLive, return_freed_memory
 from gyro_char.live.checkpoint import load_checkpoint, PeriodicCheckpoint
 from gyro_char.live.status import InputStatus
 from gyro_char.live.stream_health import DROP, RESTART, StreamHealth
-from gyro_char.nodes.common import (declare, LATCHED_1, Param, publish_input_health, RELIABLE_10,
-                                    run_node, sensor_qos, split_at_markers, validate)
+from gyro_char.nodes.common import (declare, InvalidParameter, LATCHED_1, Param,
+                                    publish_input_health, RELIABLE_10, run_node, sensor_qos,
+                                    split_at_markers, validate)
 from gyro_char.records import IMU_CHANNELS
 from msg_adapters import imu_sample
 from msg_adapters.diagnostics import (
@@ -63,6 +65,9 @@ PARAMS = [
     Param('fit_bootstrap', 50, 'bootstrap curves for the 68 % intervals of the fit', low=2,
           high=1000),
     Param('fit_tau_min_s', 0.0, 'fit only tau >= this (s); 0 = all', low=0.0, high=1e6),
+    Param('sensor_filter', 'none', "the sensor's output filter in the noise fit: none, "
+          'boxcar:TAPS[@RATE] or bartlett:TAPS[@RATE] (RATE: 8x or Hz); auto needs the '
+          'samples (gyro-char allan)'),
     Param('frame_id', '', 'expected Imu header.frame_id ("" = accept any)'),
     Param('hardware_id', 'imu', 'hardware_id reported in /diagnostics'),
     Param('stall_timeout_s', 1.0, 'the input silent this long is reported stalled (s)',
@@ -81,6 +86,18 @@ PARAMS = [
 SPECS = {p.name: p for p in PARAMS}
 
 
+def sensor_filter_reason(values: Dict[str, Any]) -> Optional[str]:
+    """Return why ``sensor_filter`` is refused (None when valid): a bad spec, or ``auto``."""
+    try:
+        spec = parse_spec(values.get('sensor_filter', 'none'))
+    except InputError as exc:
+        return str(exc)
+    if spec.mode == 'auto':
+        return ('sensor_filter auto needs the samples, which the node does not keep: give '
+                'the filter (e.g. bartlett:7@8x) or run gyro-char allan --sensor-filter auto')
+    return None
+
+
 class AllanNode(Node):
     """Thin rclpy front door to ``AllanLive`` and the noise fit."""
 
@@ -89,6 +106,9 @@ class AllanNode(Node):
         return_freed_memory()  # day-long runs: keep the accumulator's temporaries off the RSS
         self.p = declare(self, PARAMS)
         p = self.p
+        reason = sensor_filter_reason(p)
+        if reason:
+            raise InvalidParameter(reason)
         self.live = AllanLive(
             IMU_CHANNELS, rate_hz=p['rate_hz'], m_max=p['m_max'], feed_chunk=p['feed_chunk'],
             motion={'block_s': p['motion_block_s'],
@@ -123,7 +143,7 @@ class AllanNode(Node):
     # -- parameters ----------------------------------------------------------------------------
 
     def _validate(self, params: List[Any]):
-        return validate(SPECS, params, current=self.p)
+        return validate(SPECS, params, cross_check=sensor_filter_reason, current=self.p)
 
     def _apply(self, params: List[Any]) -> None:
         self.p.update({q.name: q.value for q in params if q.name in SPECS})
@@ -238,7 +258,8 @@ class AllanNode(Node):
                 # seed c: the same draws as fit_result on all channels at once.
                 fits[name] = fit_result(one, method=self.p['fit_method'],
                                         tau_min=self.p['fit_tau_min_s'] or None,
-                                        n_boot=self.p['fit_bootstrap'], seed=c)[name]
+                                        n_boot=self.p['fit_bootstrap'], seed=c,
+                                        sensor_filter=self.p['sensor_filter'])[name]
             except (ValueError, ArithmeticError, IndexError) as exc:
                 failed[name] = str(exc)
         return {'fits': fits, 'failed': failed}

@@ -2,20 +2,22 @@
 ``allan.png`` and the human table of the noise terms (deg/sqrt(h), deg/h, ...).
 
 One log-log panel per sensor kind (gyro, accel): sigma(tau) of each channel with its 68 % band,
-the fitted total of formula (4) and each resolved term's straight line, over the fitted taus.
+the fitted model and each selected term (formula (4)'s lines, the white term through the sensor
+filter when one is used, Markov bumps), over the fitted taus.
 """
 from typing import Dict, List
 
 from gyro_char.allan.fit import NoiseFit
 from gyro_char.allan.kernel import AllanResult
-from gyro_char.allan.model import model_avar, TERMS
+from gyro_char.allan.model import TERMS
 from gyro_char.units import HUMAN_UNITS, RATE_UNITS, to_human
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-TERM_STYLE = {'R': ':', 'K': '--', 'B': '-.', 'N': (0, (5, 1, 1, 1)), 'Q': (0, (1, 3))}
+TERM_STYLE = {'R': ':', 'K': '--', 'B': '-.', 'N': (0, (5, 1, 1, 1)), 'Q': (0, (1, 3)),
+              'M': (0, (3, 1, 1, 1, 1, 1))}
 
 
 def plot_allan(res: AllanResult, fits: Dict[str, NoiseFit], path: str, title: str = '') -> None:
@@ -34,13 +36,11 @@ def plot_allan(res: AllanResult, fits: Dict[str, NoiseFit], path: str, title: st
             fit = fits.get(name)
             if fit is None:
                 continue
-            coeffs = fit.coeffs()
             tau = fit.tau  # only over the fitted range (see --tau-min)
-            ax.loglog(tau, np.sqrt(model_avar(tau, coeffs)), color=color, lw=1, alpha=0.9)
-            for term in TERMS:
-                if coeffs[term] > 0 and fit.terms[term].resolved:
-                    ax.loglog(tau, np.sqrt(model_avar(tau, {term: coeffs[term]})),
-                              color=color, lw=0.8, ls=TERM_STYLE[term], alpha=0.8)
+            ax.loglog(tau, np.sqrt(fit.model_avar(tau)), color=color, lw=1, alpha=0.9)
+            for term, avar in fit.term_avars(tau).items():
+                ax.loglog(tau, np.sqrt(avar), color=color, lw=0.8, ls=TERM_STYLE[term[0]],
+                          alpha=0.8)
         top = np.nanmax(res.adev_hi if res.adev_hi is not None else res.adev)
         low = np.nanmin(res.adev_lo if res.adev_lo is not None else res.adev)
         ax.set_ylim(low / 2.0, top * 2.0)
@@ -48,9 +48,11 @@ def plot_allan(res: AllanResult, fits: Dict[str, NoiseFit], path: str, title: st
         ax.set_ylabel(f'Allan deviation [{RATE_UNITS[kind]}]')
         ax.grid(True, which='both', alpha=0.3)
         handles, labels = ax.get_legend_handles_labels()
-        extra = [plt.Line2D([], [], color='k', lw=1, label='fit, formula (4)')]
+        extra = [plt.Line2D([], [], color='k', lw=1, label='fitted model')]
         extra += [plt.Line2D([], [], color='k', lw=0.8, ls=TERM_STYLE[t], label=f'{t} term')
                   for t in TERMS]
+        extra.append(plt.Line2D([], [], color='k', lw=0.8, ls=TERM_STYLE['M'],
+                                label='Markov term'))
         ax.legend(handles + extra, labels + [h.get_label() for h in extra], fontsize=8,
                   ncol=2)
         ax.set_title(f'{kind}: overlapping Allan deviation, 68 % band')
@@ -85,6 +87,10 @@ def table(fits: Dict[str, NoiseFit]) -> List[str]:
                 else:
                     cells.append(f'< {value:.3g}')
             lines.append(f'{name:9s}' + ''.join(f'{c:>26s}' for c in cells))
+            for m in fits[name].markov:  # IEEE 952 Annex C terms (--markov)
+                sigma = to_human('B', kind, m.sigma.value)
+                lines.append(f'{"":9s}Markov term: T_c {m.tau_c:.4g} s, sigma '
+                             f'{"" if m.sigma.resolved else "< "}{sigma:.4g} {units["B"][1]}')
         lines.append('')
     lines.append("value (68 % interval); '< x': term not resolved by the record, x is an upper "
                  'bound. B is the IEEE coefficient (flat floor of sigma = 0.664 B).')

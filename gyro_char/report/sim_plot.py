@@ -36,8 +36,9 @@ def plot_allan_vs_truth(allan: dict, truth: dict, path: str,
         fit = (noise or {}).get('channels', {}).get(name)
         if fit:
             # Unresolved terms are upper bounds, not estimates: only resolved ones are drawn.
-            coeffs = {t: v['value'] for t, v in fit.items()
-                      if isinstance(v, dict) and v.get('resolved', True)}
+            # (formula (4)'s five terms; the channel's extra fields are not terms)
+            coeffs = {t: fit[t]['value'] for t in ('N', 'B', 'K', 'Q', 'R')
+                      if t in fit and fit[t].get('resolved', True)}
             ax.loglog(tau, np.sqrt(model_avar(tau, coeffs)) * DPH, 'C3--', lw=1.0,
                       label='fitted (resolved terms)')
         ax.set_title(name)

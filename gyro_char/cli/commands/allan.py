@@ -31,7 +31,18 @@ def register(subparsers) -> None:
                         'standardised by their EDF and median-unbiased (more accurate K); '
                         'weighted: EDF-weighted log least squares')
     p.add_argument('--tau-min', type=float, default=None, metavar='S',
-                   help='fit only tau >= S (e.g. to skip a sensor filter at short tau)')
+                   help='fit only tau >= S (a workaround; --sensor-filter models the filter)')
+    p.add_argument('--sensor-filter', default='none', metavar='SPEC',
+                   help="the sensor's own output filter, modelled exactly in the white term: "
+                        'none (default), auto[@RATE] (estimated from the record), '
+                        'boxcar:TAPS[@RATE] or bartlett:TAPS[@RATE]; RATE = the internal rate, '
+                        '8x (multiple of the output rate) or Hz (docs/cli.md)')
+    p.add_argument('--markov', type=int, choices=(0, 1, 2), default=0,
+                   help='up to this many IEEE 952 exponentially correlated (Markov) terms, '
+                        'kept only where the term selection keeps them (default 0)')
+    p.add_argument('--despike', action='store_true',
+                   help='replace detected spikes (impulsive outliers) by the mean of their '
+                        'neighbours; counted in a note (spikes are always detected and noted)')
     p.add_argument('--m-max', type=int, default=None,
                    help='largest averaging factor (default: half the record)')
     p.add_argument('--noise-id', choices=('acf', 'fit'), default='acf',
@@ -47,17 +58,20 @@ def run(args) -> int:
     from gyro_char.allan.compute import compute
     from gyro_char.allan.edf import add_confidence, alpha_from_model
     from gyro_char.allan.fit import fit_result
+    from gyro_char.allan.sensor_filter import parse_spec
     from gyro_char.report.allan_plot import table
     import numpy as np
 
+    parse_spec(args.sensor_filter)  # a bad spec is a usage error before any reading
     rec = read_imu(args.input, topic=args.topic, quiet=args.quiet)
     channels = None
     if args.channels:
         channels = [c.strip() for c in args.channels.split(',') if c.strip()]
-    res = compute(rec, channels=channels, m_max=args.m_max)
+    res = compute(rec, channels=channels, m_max=args.m_max, sensor_filter=args.sensor_filter,
+                  despike=args.despike)
     try:
         fits = fit_result(res, method=args.fit, tau_min=args.tau_min, n_boot=args.boot,
-                          seed=args.seed)
+                          seed=args.seed, markov=args.markov)
     except ValueError as exc:
         raise InputError(f'cannot fit the noise model: {exc}') from None
     if args.noise_id == 'fit':

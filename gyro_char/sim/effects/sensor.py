@@ -5,6 +5,8 @@ Axis-selecting parameters: ``axis`` -1 means all three gyro axes, 0/1/2 one of x
 Effects that map exactly onto an IEEE 952 term (B, K, Q) add it, in quadrature, to the truth of
 the channels they touch; ``internal_lowpass`` rescales truth N by its exact long-tau gain.
 """
+# The kernel is the one the noise fit models (one definition): ``taps``-point averages cascaded.
+from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
@@ -31,14 +33,6 @@ def _add_truth_term(truth, rows, term, value):
         ch = truth['channels'].get(GYRO_CHANNELS[r])
         if ch is not None:
             ch[term] = float(np.hypot(ch[term], value))
-
-
-def bartlett_kernel(taps: int, stages: int) -> np.ndarray:
-    """Impulse response of ``stages`` cascaded ``taps``-point moving averages (unit DC gain)."""
-    h = np.ones(1)
-    for _ in range(stages):
-        h = np.convolve(h, np.full(taps, 1.0 / taps))
-    return h
 
 
 @register
