@@ -25,7 +25,7 @@ def test_scheduler_runs_the_channels_as_tasks_and_matches_the_local_run(tmp_path
     common = ['diagnose', '--kind', 'static', str(csv), '--repeats', '4', '--check', '0',
               '--quiet']
     assert main(common + ['--out', str(tmp_path / 'local')]) == 0
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
         assert main(common + ['--out', str(tmp_path / 'dask'),
                               '--scheduler', cluster.scheduler_address]) == 0

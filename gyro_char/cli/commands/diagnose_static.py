@@ -142,7 +142,7 @@ def map_tasks(fn: Callable[[dict], dict], tasks: List[dict],
         raise InputError('--scheduler needs the dask distributed package '
                          '(pip install distributed)') from None
     try:
-        client = Client(scheduler, timeout='10s')
+        client = Client(scheduler, timeout='5s')
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(f'cannot reach the Dask scheduler {scheduler!r}: {exc}') from None
     try:
