@@ -42,7 +42,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            f'{node} = {PACKAGE}.nodes.{node}:main' for node in NODES
+            f'{node} = {PACKAGE}.nodes.entry:{node}' for node in NODES
         ] + [
             f'gyro-char = {PACKAGE}.cli:main',
         ],

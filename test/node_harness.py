@@ -4,8 +4,10 @@ import json
 import os
 from pathlib import Path
 import shutil
+import signal
 import subprocess
 import sys
+import threading
 import time
 from typing import Callable, Dict, List, Optional
 
@@ -19,9 +21,31 @@ from sensor_msgs.msg import Imu, JointState
 
 ROOT = Path(__file__).resolve().parents[1]
 EPOCH = 1000.0  # stamp offset (s) of the simulated runs fed to the nodes
-# ROS_DOMAIN_IDs of the node tests (this session's range 80-89), one per test file and mode.
-DOMAINS = {'swing': (80, 81), 'allan': (82, 83), 'bench_sim': (84, 85), 'dds_smoke': 86,
-           'colcon': 87}
+
+
+def _domain_ids() -> List[int]:
+    """
+    Return the ROS_DOMAIN_IDs the node tests may use, one per test file and mode.
+
+    ``GYRO_CHAR_TEST_DOMAINS`` (e.g. ``63,163-169``) gives them when several sessions run node
+    tests on one machine at once; the default is 80-91. Fewer ids than needed are reused in turn.
+    """
+    ids: List[int] = []
+    for part in os.environ.get('GYRO_CHAR_TEST_DOMAINS', '80-91').split(','):
+        low, _, high = part.strip().partition('-')
+        ids += list(range(int(low), int(high or low) + 1))
+    return ids
+
+
+_IDS = _domain_ids()
+_KEYS = [('swing', 2), ('allan', 2), ('bench_sim', 2), ('dds_smoke', 1), ('colcon', 1),
+         ('shutdown', 1), ('instances', 1), ('params', 1)]
+DOMAINS: Dict[str, object] = {}
+_next = 0
+for _key, _n in _KEYS:
+    _got = tuple(_IDS[(_next + k) % len(_IDS)] for k in range(_n))
+    DOMAINS[_key] = _got if _n > 1 else _got[0]
+    _next += _n
 
 
 def ros_env(domain_id: int) -> Dict[str, str]:
@@ -148,6 +172,73 @@ def stop(proc: subprocess.Popen, timeout: float = 10.0) -> str:
             proc.wait()
     out = proc.stdout.read() if proc.stdout else b''
     return out.decode(errors='replace') if isinstance(out, bytes) else out
+
+
+class NodeProcess:
+    """
+    A node executable we started, its output collected line by line in the background.
+
+    ``wait_for(text)`` blocks until a line containing ``text`` was printed (e.g. a log line
+    that marks the instant to send a signal); ``stop(sig)`` sends one signal and waits.
+    """
+
+    def __init__(self, executable: str, ros_args: List[str], domain_id: int) -> None:
+        self.lines: List[str] = []
+        self._cond = threading.Condition()
+        self.proc = subprocess.Popen(node_command(executable) + ['--ros-args', *ros_args],
+                                     env=ros_env(domain_id), stdout=subprocess.PIPE,
+                                     stderr=subprocess.STDOUT, text=True)
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.proc.stdout:
+            with self._cond:
+                self.lines.append(line)
+                self._cond.notify_all()
+
+    @property
+    def output(self) -> str:
+        """Return everything printed so far."""
+        with self._cond:
+            return ''.join(self.lines)
+
+    def wait_for(self, text: str, timeout: float) -> bool:
+        """Wait until a printed line contains ``text``; False on timeout or process exit."""
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while not any(text in line for line in self.lines):
+                left = deadline - time.monotonic()
+                if left <= 0 or self.proc.poll() is not None:
+                    return any(text in line for line in self.lines)
+                self._cond.wait(min(left, 0.1))
+        return True
+
+    def stop(self, sig: int = signal.SIGINT, timeout: float = 15.0) -> Optional[float]:
+        """Send ``sig`` and wait; return the seconds until exit (None: killed after timeout)."""
+        start = time.monotonic()
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            self._reader.join(5.0)
+            return None
+        self._reader.join(5.0)
+        return time.monotonic() - start
+
+
+def clean_exit_problems(proc: 'NodeProcess') -> List[str]:
+    """List what is wrong with a node's exit: a code other than 0, a traceback, an abort."""
+    out = proc.output
+    problems = [] if proc.proc.returncode == 0 else [f'exit code {proc.proc.returncode}']
+    for bad in ('Traceback', 'terminate called', 'Fatal Python error', 'RCLError',
+                'Exception in'):
+        if bad in out:
+            problems.append(f'{bad!r} in the output')
+    return problems
 
 
 def read_json(path: Path) -> dict:

@@ -93,8 +93,8 @@ def test_parameters_are_validated(context):
         assert desc.description and desc.floating_point_range
     finally:
         node.destroy_node()
-    from gyro_char.errors import InputError
-    with pytest.raises(InputError):
+    from gyro_char.nodes.common import InvalidParameter
+    with pytest.raises(InvalidParameter, match='kind'):
         BenchSimNode(context=context, parameter_overrides=[Parameter('kind', value='moving')])
 
 
@@ -141,7 +141,7 @@ def test_separate_process_static_run_over_loopback(monkeypatch):
 
 
 @pytest.mark.parametrize('param,message', [
-    ('kind:=moving', b'kind must be swing or static'),
+    ('kind:=moving', b'kind must be one of'),
 ])
 def test_bad_parameter_exits_2(param, message):
     proc = subprocess.run(_node_cmd(param), env=ros_env(DOMAIN_CROSS_PROCESS),
@@ -196,3 +196,14 @@ def test_wait_for_subscribers_holds_the_first_sample(context):
     run = simulate_static(load(), duration=1.0, seed=0)
     assert len(imu) == len(run.imu)
     assert _stamp(imu[0]) == base + int(np.round(run.imu.t[0] * 1e9))
+
+
+def test_empty_effects_and_an_integer_duration_are_accepted(context):
+    node = BenchSimNode(context=context, parameter_overrides=[
+        Parameter('effects', value=[]), Parameter('duration_s', value=1),
+        Parameter('kind', value='static')])
+    try:
+        assert node.effects == [] and node.p['duration_s'] == 1.0
+        assert node.imu_t.size == simulate_static(load(), duration=1.0, seed=0).imu.t.size
+    finally:
+        node.destroy_node()

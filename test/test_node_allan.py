@@ -11,6 +11,7 @@ from gyro_char.allan.compute import compute
 from gyro_char.live.checkpoint import load_checkpoint
 from gyro_char.nodes.allan_node import AllanNode
 from gyro_char.nodes.common import LATCHED_1
+from gyro_char.records import Recording
 from gyro_char.sim.simulator import simulate_static
 from msg_adapters.diagnostics import parse_multiarray
 from node_harness import (
@@ -24,7 +25,7 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
 DOMAIN_IN_PROCESS, DOMAIN_PROCESS = DOMAINS['allan']
-INPUTS = 'allan_node: inputs'
+INPUTS = '/allan_node: inputs'
 CHANNELS = ['gyro_x', 'gyro_y', 'gyro_z', 'accel_x', 'accel_y', 'accel_z']
 
 
@@ -100,14 +101,14 @@ def test_curve_and_noise_against_batch_and_truth(sim, tmp_path):
         assert np.all(data[:, 2] <= data[:, 1]) and np.all(data[:, 1] <= data[:, 3])
         # N of every gyro axis against the simulator's truth.
         for c in CHANNELS[:3]:
-            level, _, v = noise.last[f'allan_node: noise {c}']
+            level, _, v = noise.last[f'/allan_node: noise {c}']
             truth_n = sim.truth['channels'][c]['N']
             assert level == 0 and v['N_resolved'] == 1
             assert v['N_lo_rad_sqrt_s'] * 0.9 <= truth_n <= v['N_hi_rad_sqrt_s'] * 1.1, (v, c)
             assert v['samples'] == t.size
         assert spin_until(ex, lambda: 'files written' in node.fit_status, 30.0), node.fit_status
         noise_json = json.loads((tmp_path / 'out' / 'noise.json').read_text())
-        gx = noise.last['allan_node: noise gyro_x'][2]
+        gx = noise.last['/allan_node: noise gyro_x'][2]
         assert noise_json['channels']['gyro_x']['N']['value'] == pytest.approx(
             gx['N_rad_sqrt_s'], rel=1e-12)
         assert sorted(os.listdir(tmp_path / 'out')) == [
@@ -117,6 +118,31 @@ def test_curve_and_noise_against_batch_and_truth(sim, tmp_path):
         assert node.live.n_samples == 0
         assert not _call(ex, peer, '/allan_node/compute').success
         node.destroy_node()
+
+
+def test_channels_parameter_limits_what_is_accumulated_and_fitted(sim):
+    t, x = _sim_arrays(sim)
+    t, x = t[:8000], x[:8000]
+    chosen = ['gyro_z', 'accel_x']
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context, m_max=2 ** 12, fit_bootstrap=8,
+                                                  channels=chosen)
+        _publish(ex, node, feeder, t, x)
+        got = {}
+        peer.create_subscription(Float64MultiArray, '/allan_node/allan_curve',
+                                 lambda m: got.setdefault('curve', m), LATCHED_1)
+        noise = Listener(peer, ['/allan_node/noise'], LATCHED_1)
+        assert _call(ex, peer, '/allan_node/compute').success
+        assert spin_until(ex, lambda: 'curve' in got and noise.last, 60.0), node.fit_status
+        node.destroy_node()
+    data, labels = parse_multiarray(got['curve'])
+    assert labels[0] == ('channel', chosen)
+    # The same curve as the batch path on those channels of the same samples.
+    first = Recording(sim.imu.t[:8000], {c: sim.imu.channels[c][:8000] for c in chosen})
+    batch = compute(first, channels=chosen, m_max=2 ** 12)
+    k = min(batch.tau.size, data.shape[2])
+    np.testing.assert_allclose(data[:, 1, :k], batch.adev[:k].T, rtol=1e-9)
+    assert sorted(noise.last) == [f'/allan_node: noise {c}' for c in ('accel_x', 'gyro_z')]
 
 
 def test_bad_input_motion_and_gaps_reported(sim):
@@ -244,8 +270,8 @@ def test_kill_9_and_resume_loses_at_most_one_checkpoint_period(tmp_path):
             future = client.call_async(Trigger.Request())
             assert spin_until(ex, future.done, 20.0) and future.result().success
             noise = Listener(peer, ['/allan_node/noise'], LATCHED_1)
-            assert spin_until(ex, lambda: 'allan_node: noise gyro_x' in noise.last, 90.0)
-            v = noise.last['allan_node: noise gyro_x'][2]
+            assert spin_until(ex, lambda: '/allan_node: noise gyro_x' in noise.last, 90.0)
+            v = noise.last['/allan_node: noise gyro_x'][2]
             truth = read_json(summary)['truth']['channels']['gyro_x']['N']
             assert v['samples'] == final['samples']
             assert v['N_rad_sqrt_s'] == pytest.approx(truth, rel=0.1)
@@ -261,4 +287,6 @@ def test_invalid_startup_parameter_exits_2_with_the_reason():
     proc = subprocess.run(node_command('allan_node') + ['--ros-args', '-p', 'fit_method:=ols'],
                           env=ros_env(DOMAIN_PROCESS), capture_output=True, timeout=60)
     assert proc.returncode == 2
-    assert b'fit_method must be one of' in proc.stdout
+    assert proc.stderr.decode().strip().splitlines() == [
+        "allan_node: invalid parameter: fit_method must be one of ['l1', 'l1w', 'weighted'], "
+        "got 'ols'"]

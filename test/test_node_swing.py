@@ -6,6 +6,7 @@ from types import SimpleNamespace
 
 from gyro_char.nodes.common import InvalidParameter
 from gyro_char.nodes.swing_kf_node import SwingKfNode
+from gyro_char.sim.config import load
 from gyro_char.sim.simulator import simulate_swing
 from node_harness import (
     DOMAINS, EPOCH, Feeder, Listener, make_executor, node_command, read_json, ROOT, ros_context,
@@ -17,8 +18,8 @@ from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
 DOMAIN_IN_PROCESS, DOMAIN_PROCESS = DOMAINS['swing']
-EST = 'swing_kf_node: estimates'
-INPUTS = 'swing_kf_node: inputs'
+EST = '/swing_kf_node: estimates'
+INPUTS = '/swing_kf_node: inputs'
 
 
 @pytest.fixture(scope='module')
@@ -43,8 +44,13 @@ def _graph(context, **params):
     return node, test_node, listener, feeder, ex
 
 
-def _feed_run(ex, node, feeder, run, burst=250):
-    """Publish a simulated run in bursts, waiting until the node has taken each burst."""
+def _feed_run(ex, node, feeder, run, burst=250, judge=False):
+    """
+    Publish a simulated run in bursts, waiting until the node has taken each burst.
+
+    ``judge``: also process and judge the estimates after each burst (as the publish timer
+    does in real time), so that convergence sees the data arrive.
+    """
     gyro = run.imu.channels['gyro_x']
     ti, te, angle = run.imu.t, run.encoder.t, run.encoder.channels['encoder']
     i = j = 0
@@ -58,6 +64,9 @@ def _feed_run(ex, node, feeder, run, burst=250):
             j += 1
         assert spin_until(ex, lambda: node.imu_health.received >= i
                           and node.enc_health.received >= j, 5.0), 'messages lost in process'
+        if judge:
+            node.process()
+            node.estimate_values()
     node.process()
     return i, j
 
@@ -75,7 +84,13 @@ def test_estimates_match_truth_in_process(sim):
                           5.0)
         v = listener.values(EST)
         assert v['samples_encoder'] == n_enc == sim.encoder.t.size
-        assert v['converged'] == 1 and listener.last[EST][0] == 0
+        # 20 s of a MEMS gyro: the drift sigma is far above the drift, so not converged.
+        assert v['bias_drift_sigma_rad_s2'] > 10 * abs(truth['bias_drift'])
+        level, message, _ = listener.last[EST]
+        assert v['converged'] == 0 and level == 1 and 'bias_drift' in message, message
+        # The bias is the rate offset at the first stamp the filter took.
+        starts = [EPOCH + sim.imu.t[0], EPOCH + sim.encoder.t[0]]
+        assert min(abs(v['bias_epoch_s'] - t) for t in starts) < 1e-6, (v['bias_epoch_s'], starts)
         assert _within(v['scale_factor_error'], v['scale_factor_error_sigma'],
                        truth['scale_factor_error'])
         assert _within(v['bias_rad_s'], v['bias_sigma_rad_s'], truth['bias'])
@@ -96,7 +111,58 @@ def test_estimates_match_truth_in_process(sim):
         future = client.call_async(Trigger.Request())
         assert spin_until(ex, future.done, 5.0) and future.result().success
         assert node.core.estimates().samples == 0
+        assert np.isnan(node.estimate_values()['bias_epoch_s'])
+        # Absolute tolerances accept these sigmas: converged after one period of data.
+        for name, tol in (('converged_scale_factor_error_sigma', 1e-2),
+                          ('converged_bias_sigma_rad_s', 1e-2),
+                          ('converged_bias_drift_sigma_rad_s2', 1e-2)):
+            assert node.set_parameters([Parameter(name, value=tol)])[0].successful
+        assert node.set_parameters([Parameter('converged_periods', value=1)])[0].successful
+        assert node.get_parameter('converged_periods').value == 1.0  # the integer is a float
+        later = SimpleNamespace(imu=_shifted(sim.imu, 100.0), encoder=_shifted(sim.encoder, 100.0))
+        _feed_run(ex, node, feeder, later, judge=True)
+        v = node.estimate_values()
+        assert v['converged'] is True
+        starts = [EPOCH + 100.0 + sim.imu.t[0], EPOCH + 100.0 + sim.encoder.t[0]]
+        assert min(abs(v['bias_epoch_s'] - t) for t in starts) < 1e-6
         node.destroy_node()
+
+
+def _shifted(rec, dt):
+    return SimpleNamespace(t=rec.t + dt, channels=rec.channels)
+
+
+def _part(run, start, end):
+    """Return the samples of a run with start <= t < end, as a run."""
+    def cut(rec, name):
+        k = (rec.t >= start) & (rec.t < end)
+        return SimpleNamespace(t=rec.t[k], channels={name: rec.channels[name][k]})
+    return SimpleNamespace(imu=cut(run.imu, 'gyro_x'), encoder=cut(run.encoder, 'encoder'))
+
+
+def test_bias_refers_to_its_epoch_after_a_reset():
+    """After ~/reset the bias is the rate offset at the first new stamp, not at the run's start."""
+    config = load()
+    config.gyro.bias_drift['x'] = 3e-4  # rad/s^2: 10 s of drift = 3e-3 rad/s, ~8 bias sigmas
+    run = simulate_swing(config, duration=20.0, seed=4)
+    truth = run.truth['swing']
+    with ros_context(DOMAIN_IN_PROCESS) as context:
+        node, peer, listener, feeder, ex = _graph(context)
+        _feed_run(ex, node, feeder, _part(run, 0.0, 10.0))
+        client = peer.create_client(Trigger, '/swing_kf_node/reset')
+        assert client.wait_for_service(timeout_sec=5.0)
+        future = client.call_async(Trigger.Request())
+        assert spin_until(ex, future.done, 5.0) and future.result().success
+        second = _part(run, 10.0, 20.0)
+        _feed_run(ex, node, feeder, second)
+        v = node.estimate_values()
+        node.destroy_node()
+    epoch = v['bias_epoch_s']
+    assert min(abs(epoch - EPOCH - second.imu.t[0]), abs(epoch - EPOCH - second.encoder.t[0])) \
+        < 1e-6, epoch
+    at_epoch = truth['bias'] + truth['bias_drift'] * (epoch - EPOCH)
+    assert _within(v['bias_rad_s'], v['bias_sigma_rad_s'], at_epoch)
+    assert not _within(v['bias_rad_s'], v['bias_sigma_rad_s'], truth['bias'])
 
 
 def test_imu_gaps_are_bridged_and_reported(sim):

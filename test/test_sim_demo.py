@@ -44,7 +44,8 @@ def test_demo_tables_offline_and_live(tmp_path, capsys, monkeypatch):
     assert (out / 'demo.txt').read_text().strip() in text
     if not live:
         return
-    assert 'live node: 20 s replayed' in text and 'converged True' in text, text
+    # 20 s do not resolve a MEMS gyro's drift (sigma ~30x the drift): not converged.
+    assert 'live node: 20 s replayed' in text and 'converged False' in text, text
     # When the live filter saw the samples (no loss warning), it agrees with the offline one
     # on the same run (same seed and length); lost samples (best effort, machine overloaded)
     # are reported instead.

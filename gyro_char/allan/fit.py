@@ -14,7 +14,7 @@ The reasoning is in docs/method.md, the measured accuracy in docs/validation.md.
 """
 import contextlib
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 from gyro_char.allan.design import FitDesign
 from gyro_char.allan.edf import chi2_interval, chi2_ppf
@@ -155,7 +155,7 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
               tau_min: Optional[float] = None, tau_max: Optional[float] = None,
               n_boot: int = N_BOOT, rng: Optional[np.random.Generator] = None,
               dt: Optional[float] = None, sensor_filter: Optional[FilterChoice] = None,
-              markov: int = 0) -> NoiseFit:
+              markov: int = 0, interrupt: Optional[Callable[[], None]] = None) -> NoiseFit:
     """
     Fit formula (4) to one channel's curve; return values, 68 % intervals and ``resolved``.
 
@@ -164,7 +164,8 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
     bound of the Allan variance at every fitted tau. ``sensor_filter`` (with ``dt``, the
     sample interval) replaces the white term by the filter's exact one; ``markov`` is the
     largest number of Markov terms searched (0, the default: formula (4) only; at most
-    ``MARKOV_MAX``).
+    ``MARKOV_MAX``). ``interrupt()``, when given, runs before each bootstrap refit: a caller
+    that must stop (a node shutting down) raises from it.
     """
     kind = sensor_kind(channel)
     tau, avar, edf = (np.asarray(v, dtype=np.float64) for v in (tau, avar, edf))
@@ -189,9 +190,12 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
                                         method, int(markov))
     a_mat = fitter.a_mat
     rng = rng or np.random.default_rng(0)
-    boot = np.array([fitter.fit(active, curve, z0=z)
-                     for curve in _draw_curves(a_mat @ z, edf_f, cov, n_boot, rng)])
-    boot = np.sqrt(np.maximum(boot, 0.0))
+    boot = []
+    for curve in _draw_curves(a_mat @ z, edf_f, cov, n_boot, rng):
+        if interrupt is not None:
+            interrupt()
+        boot.append(fitter.fit(active, curve, z0=z))
+    boot = np.sqrt(np.maximum(np.array(boot), 0.0))
     coef = np.sqrt(np.maximum(z, 0.0))
     lo, hi = np.percentile(boot, [100 * 0.1587, 100 * 0.8413], axis=0)
     avar_hi = chi2_interval(np.sqrt(avar_f), edf_f, BOUND_CI)[1] ** 2
@@ -216,7 +220,8 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
 
 def fit_result(res, *, method: str = 'l1', tau_min: Optional[float] = None,
                n_boot: int = N_BOOT, seed: int = 0, sensor_filter=None,
-               markov: int = 0) -> Dict[str, NoiseFit]:
+               markov: int = 0,
+               interrupt: Optional[Callable[[], None]] = None) -> Dict[str, NoiseFit]:
     """
     Fit every channel of an ``AllanResult`` (with EDF) and return {channel: NoiseFit}.
 
@@ -232,5 +237,5 @@ def fit_result(res, *, method: str = 'l1', tau_min: Optional[float] = None,
                                   channel=name, method=method, tau_min=tau_min,
                                   n_boot=n_boot, rng=np.random.default_rng(seed + c),
                                   dt=res.dt, sensor_filter=choices.get(name),
-                                  markov=markov)
+                                  markov=markov, interrupt=interrupt)
     return out

@@ -6,7 +6,10 @@ channels to a deque; a timer drains it into ``AllanLive`` (segmented streaming a
 motion detector) every ``processing_period_s`` and writes an atomic checkpoint every
 ``checkpoint_period_s``. ``~/compute`` publishes the Allan curve at once and runs the noise fit
 in a worker thread (it takes seconds; ingestion goes on meanwhile), then publishes ``~/noise``
-and, with ``output_dir`` set, writes the files of ``gyro-char allan``.
+and, with ``output_dir`` set, writes the files of ``gyro-char allan`` for the channels whose
+fit succeeded (a failed channel is reported on ``~/noise``, in the diagnostics and the log).
+On a stop signal the fit is cancelled between two bootstrap refits and joined before the last
+checkpoint is written.
 """
 from collections import deque
 from dataclasses import replace
@@ -25,7 +28,7 @@ from gyro_char.live.status import InputStatus
 from gyro_char.live.stream_health import DROP, RESTART, StreamHealth
 from gyro_char.nodes.common import (declare, InvalidParameter, LATCHED_1, Param,
                                     publish_input_health, RELIABLE_10, run_node, sensor_qos,
-                                    split_at_markers, validate)
+                                    split_at_markers, status_name, validate)
 from gyro_char.records import IMU_CHANNELS
 from msg_adapters import imu_sample
 from msg_adapters.diagnostics import (
@@ -46,6 +49,8 @@ UNIT_KEYS = {
 
 PARAMS = [
     Param('imu_topic', 'imu/data_raw', 'sensor_msgs/Imu input topic', read_only=True),
+    Param('channels', list(IMU_CHANNELS), 'IMU channels to accumulate and fit (as gyro-char '
+          'allan --channels)', read_only=True, choices=IMU_CHANNELS),
     Param('input_queue_depth', 5000, 'subscription history depth (best effort)',
           read_only=True, low=10, high=1000000),
     Param('rate_hz', 0.0, 'IMU sample rate (Hz); 0 = median interval of the first samples',
@@ -69,7 +74,8 @@ PARAMS = [
           'boxcar:TAPS[@RATE] or bartlett:TAPS[@RATE] (RATE: 8x or Hz); auto needs the '
           'samples (gyro-char allan)'),
     Param('frame_id', '', 'expected Imu header.frame_id ("" = accept any)'),
-    Param('hardware_id', 'imu', 'hardware_id reported in /diagnostics'),
+    Param('hardware_id', '', 'hardware_id reported in /diagnostics ("" = the resolved IMU '
+          'topic name, which differs per instance)'),
     Param('stall_timeout_s', 1.0, 'the input silent this long is reported stalled (s)',
           low=0.01, high=3600.0),
     Param('max_rate_hz', 20000.0, 'messages per second above which the excess is dropped as '
@@ -84,6 +90,10 @@ PARAMS = [
           'parameter file)', low=0.0, high=1e6),
 ]
 SPECS = {p.name: p for p in PARAMS}
+
+
+class FitCancelled(Exception):
+    """The noise fit was abandoned because the node is stopping."""
 
 
 def sensor_filter_reason(values: Dict[str, Any]) -> Optional[str]:
@@ -109,8 +119,9 @@ class AllanNode(Node):
         reason = sensor_filter_reason(p)
         if reason:
             raise InvalidParameter(reason)
+        self._columns = [IMU_CHANNELS.index(c) for c in p['channels']]
         self.live = AllanLive(
-            IMU_CHANNELS, rate_hz=p['rate_hz'], m_max=p['m_max'], feed_chunk=p['feed_chunk'],
+            p['channels'], rate_hz=p['rate_hz'], m_max=p['m_max'], feed_chunk=p['feed_chunk'],
             motion={'block_s': p['motion_block_s'],
                     'variance_ratio': p['motion_variance_ratio'],
                     'mean_sigmas': p['motion_mean_sigmas']})
@@ -119,6 +130,7 @@ class AllanNode(Node):
         self.status = InputStatus()
         self._fit_thread: Optional[threading.Thread] = None
         self._fit_lock = threading.Lock()
+        self._cancel = threading.Event()
         self.fit_status = 'no fit yet'
         self.processing_errors = 0
         self.checkpoint_errors = 0
@@ -128,8 +140,9 @@ class AllanNode(Node):
             self.checkpoint = PeriodicCheckpoint(p['checkpoint_path'],
                                                  p['checkpoint_period_s'])
             self._resume()
-        self.create_subscription(Imu, p['imu_topic'], self._on_imu,
-                                 sensor_qos(p['input_queue_depth']))
+        sub = self.create_subscription(Imu, p['imu_topic'], self._on_imu,
+                                       sensor_qos(p['input_queue_depth']))
+        self.imu_topic = sub.topic_name  # resolved: namespace and remapping applied
         self.curve_pub = self.create_publisher(Float64MultiArray, '~/allan_curve', LATCHED_1)
         self.noise_pub = self.create_publisher(DiagnosticArray, '~/noise', LATCHED_1)
         self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', RELIABLE_10)
@@ -151,6 +164,11 @@ class AllanNode(Node):
         self.health.max_rate_hz = self.p['max_rate_hz']
         if self.checkpoint is not None:
             self.checkpoint.period_s = self.p['checkpoint_period_s']
+
+    @property
+    def hardware_id(self) -> str:
+        """Return the hardware_id of this node's statuses (default: the IMU topic)."""
+        return self.p['hardware_id'] or self.imu_topic
 
     # -- checkpoints ---------------------------------------------------------------------------
 
@@ -191,7 +209,7 @@ class AllanNode(Node):
             return
         if code == RESTART:
             self._q.append(None)
-        self._q.append((t, *values))
+        self._q.append((t, *(values[i] for i in self._columns)))
 
     # -- per chunk -----------------------------------------------------------------------------
 
@@ -230,8 +248,7 @@ class AllanNode(Node):
                 response.message = ('Allan curve published; a noise fit is still running, '
                                     'call again when ~/noise has been published')
                 return response
-            self._fit_thread = threading.Thread(target=self._fit_and_publish, args=(res,),
-                                                daemon=True)
+            self._fit_thread = threading.Thread(target=self._fit_and_publish, args=(res,))
             self._fit_thread.start()
         response.success = True
         response.message = (f'Allan curve of {res.n_samples} samples published on '
@@ -259,10 +276,28 @@ class AllanNode(Node):
                 fits[name] = fit_result(one, method=self.p['fit_method'],
                                         tau_min=self.p['fit_tau_min_s'] or None,
                                         n_boot=self.p['fit_bootstrap'], seed=c,
-                                        sensor_filter=self.p['sensor_filter'])[name]
+                                        sensor_filter=self.p['sensor_filter'],
+                                        interrupt=self._interrupt)[name]
             except (ValueError, ArithmeticError, IndexError) as exc:
                 failed[name] = str(exc)
         return {'fits': fits, 'failed': failed}
+
+    def _interrupt(self) -> None:
+        if self._cancel.is_set():
+            raise FitCancelled()
+
+    def stop_fit(self) -> None:
+        """Cancel a running noise fit and wait for its thread (the node is stopping)."""
+        self._cancel.set()
+        with self._fit_lock:
+            thread = self._fit_thread
+        if thread is not None:
+            thread.join()
+
+    def destroy_node(self) -> None:
+        """Cancel and join a running fit first: it publishes through this node."""
+        self.stop_fit()
+        super().destroy_node()
 
     def noise_message(self, res, fitted: Dict[str, Any]) -> DiagnosticArray:
         """Return one status per channel: N, B, K, Q, R (SI in the keys) with intervals."""
@@ -274,8 +309,8 @@ class AllanNode(Node):
             fit = fitted['fits'].get(name)
             if fit is None:
                 statuses.append(diagnostic_status(
-                    DiagnosticStatus, KeyValue, f'{NAME}: noise {name}', ERROR,
-                    'fit failed: ' + fitted['failed'].get(name, '?'), self.p['hardware_id'],
+                    DiagnosticStatus, KeyValue, status_name(self, f'noise {name}'), ERROR,
+                    'fit failed: ' + fitted['failed'].get(name, '?'), self.hardware_id,
                     values))
                 continue
             units = UNIT_KEYS[fit.kind]
@@ -288,9 +323,9 @@ class AllanNode(Node):
                 values[f'{term}_hi_{units[term]}'] = hi
                 values[f'{term}_resolved'] = bool(est.resolved)
             statuses.append(diagnostic_status(
-                DiagnosticStatus, KeyValue, f'{NAME}: noise {name}', OK,
+                DiagnosticStatus, KeyValue, status_name(self, f'noise {name}'), OK,
                 f'{fit.method} fit on {res.n_samples} samples ({duration:.6g} s); unresolved '
-                'terms are upper bounds', self.p['hardware_id'], values))
+                'terms are upper bounds', self.hardware_id, values))
         return diagnostic_array(DiagnosticArray, self.get_clock().now().to_msg(), statuses)
 
     def _fit_and_publish(self, res) -> None:
@@ -299,20 +334,27 @@ class AllanNode(Node):
             fitted = self.fit(res)
             self.noise_pub.publish(self.noise_message(res, fitted))
             status = f'fit of {res.n_samples} samples done in {time.monotonic() - started:.1f} s'
+            failed = fitted['failed']
+            if failed:
+                status += '; failed: ' + '; '.join(f'{n} ({why})' for n, why in failed.items())
             out = self.p['output_dir']
-            if out and not fitted['failed']:
+            if out and fitted['fits']:
                 from gyro_char.report.allan_outputs import write_outputs
-                write_outputs(out, res, fitted['fits'], self.p['imu_topic'],
+                write_outputs(out, res, fitted['fits'], self.imu_topic,
                               title=f'{NAME}: {res.n_samples} samples at '
                                     f'{1.0 / res.dt:.6g} Hz, fit {self.p["fit_method"]}')
-                status += f'; files written to {out}'
+                status += f'; files written to {out} ({", ".join(fitted["fits"])})'
             elif out:
-                status += f'; files not written (failed: {", ".join(fitted["failed"])})'
+                status += '; no files written (no channel fitted)'
+            log = self.get_logger().warning if failed else self.get_logger().info
+        except FitCancelled:
+            status = 'fit cancelled: the node is stopping'
+            log = self.get_logger().info
         except Exception as exc:  # noqa: B902 - a worker thread must report, never vanish
             status = f'fit/output failed: {exc!r}'
-            self.get_logger().error(status)
+            log = self.get_logger().error
         self.fit_status = status
-        self.get_logger().info(status)
+        log(status)
 
     # -- diagnostics ---------------------------------------------------------------------------
 
@@ -346,7 +388,7 @@ class AllanNode(Node):
 
     def publish_diagnostics(self) -> None:
         """Publish the input health, accumulation state and motion on /diagnostics."""
-        publish_input_health(self, NAME)
+        publish_input_health(self)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
         self._q.clear()
@@ -361,7 +403,8 @@ class AllanNode(Node):
         return response
 
 
-def _last_checkpoint(node: AllanNode) -> None:
+def _stop(node: AllanNode) -> None:
+    node.stop_fit()
     if node.checkpoint is not None:
         node.process()
         node.write_checkpoint()
@@ -369,7 +412,7 @@ def _last_checkpoint(node: AllanNode) -> None:
 
 def main(args=None) -> int:
     """Run the node (Jazzy idiom; exit 2 on an invalid parameter)."""
-    return run_node(AllanNode, NAME, on_exit=_last_checkpoint, args=args)
+    return run_node(AllanNode, NAME, on_exit=_stop, args=args)
 
 
 if __name__ == '__main__':

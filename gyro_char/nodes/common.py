@@ -1,22 +1,31 @@
 """
-rclpy glue shared by the nodes: parameter declaration with descriptors, QoS, executor.
+rclpy glue shared by the nodes: parameters, QoS, executor, status names, the process's run.
 
-Parameters are listed once as ``Param`` specs; ``declare`` turns them into descriptors (type,
-description, range, ``read_only``) and ``check`` validates a value against its spec (range,
-choices, finiteness) so that the node's on-set callback can refuse a value with a reason.
+Parameters are listed once as ``Param`` specs; the default's type is the parameter's type.
+``declare`` reads each start-up value, brings it to that type (an integer is accepted where a
+float is declared: ``-p period_s:=30``) and checks it against its spec (range, choices,
+finiteness); every refusal is collected into one ``InvalidParameter``, which ``run_node``
+prints as one line on stderr with exit code 2. At run time the same coercion runs as a pre-set
+callback and ``validate`` (the nodes' on-set callback) refuses a value with the same reason.
+
+``run_node`` stops the process in order on SIGINT / SIGTERM (``gyro_char.nodes.shutdown``).
 """
 from dataclasses import dataclass
 import math
+import sys
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from gyro_char.nodes.shutdown import Interrupted, STOP
 from msg_adapters.diagnostics import diagnostic_array, diagnostic_status
 from rcl_interfaces.msg import (
     FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.parameter import Parameter
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy)
+from rclpy.signals import SignalHandlerOptions
 
 try:  # Jazzy: much cheaper per message than SingleThreadedExecutor (measured in bench/).
     from rclpy.experimental import EventsExecutor
@@ -28,9 +37,22 @@ class InvalidParameter(ValueError):
     """A parameter value that the node refuses (the message says why)."""
 
 
+def _kind(default: Any) -> str:
+    """Name the type of a parameter from its default (for messages)."""
+    if isinstance(default, bool):
+        return 'true or false'
+    if isinstance(default, int):
+        return 'an integer'
+    if isinstance(default, float):
+        return 'a number'
+    if isinstance(default, str):
+        return 'a string'
+    return 'a list of strings'
+
+
 @dataclass
 class Param:
-    """One parameter: default, description and constraints."""
+    """One parameter: default (its type is the parameter's type), description, constraints."""
 
     name: str
     default: Any
@@ -54,29 +76,89 @@ class Param:
                     from_value=int(self.low), to_value=int(self.high), step=1)]
         return desc
 
+    def coerce(self, value: Any) -> Tuple[Any, Optional[str]]:
+        """
+        Return (``value`` in the declared type, None) or (None, why it is refused).
+
+        An integer is accepted for a float parameter; no value (an empty YAML list) is the
+        empty list for a list parameter. The value then has to pass ``check``.
+        """
+        d = self.default
+        if isinstance(d, float) and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if isinstance(d, list):
+            value = [] if value is None else value
+            ok = isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value)
+            value = list(value) if ok else value
+        elif isinstance(d, bool) or isinstance(value, bool):
+            ok = isinstance(d, bool) and isinstance(value, bool)
+        else:
+            ok = isinstance(value, type(d))
+        if not ok:
+            return None, f'{self.name} must be {_kind(d)}, got {value!r}'
+        reason = self.check(value)
+        return (None, reason) if reason else (value, None)
+
     def check(self, value: Any) -> Optional[str]:
-        """Return why ``value`` is refused, or None when it is acceptable."""
+        """Return why ``value`` (of the declared type) is refused, or None when acceptable."""
         if isinstance(value, float) and not math.isfinite(value):
             return f'{self.name} must be finite, got {value}'
         if self.low is not None and value < self.low:
             return f'{self.name} must be >= {self.low:g}, got {value}'
         if self.high is not None and value > self.high:
             return f'{self.name} must be <= {self.high:g}, got {value}'
-        if self.choices is not None and value not in self.choices:
+        if self.choices is not None and isinstance(value, list):
+            if not value or len(set(value)) < len(value) \
+                    or any(v not in self.choices for v in value):
+                return (f'{self.name} must be distinct names out of {list(self.choices)}, '
+                        f'got {value!r}')
+        elif self.choices is not None and value not in self.choices:
             return f'{self.name} must be one of {list(self.choices)}, got {value!r}'
         return None
 
 
 def declare(node: Any, specs: Iterable[Param]) -> Dict[str, Any]:
-    """Declare every spec on ``node``; return the values in force (overrides applied)."""
+    """
+    Declare every spec on ``node``; return the values in force (overrides applied, coerced).
+
+    Each start-up value (``-p``, parameter file, ``parameter_overrides``) is read through an
+    untyped declaration first, so that a value of another type reaches ``Param.coerce``
+    instead of raising inside rclpy; the parameter is then declared with its descriptor and
+    the coerced value. All refusals are raised together as one ``InvalidParameter``.
+    """
     specs = list(specs)
+    values, problems = {}, []
     for spec in specs:
-        node.declare_parameter(spec.name, spec.default, spec.descriptor())
-    values = {s.name: node.get_parameter(s.name).value for s in specs}
-    problems = [r for r in (s.check(values[s.name]) for s in specs) if r]
+        given = node.declare_parameter(spec.name, spec.default,
+                                       ParameterDescriptor(dynamic_typing=True)).value
+        node.undeclare_parameter(spec.name)
+        value, reason = spec.coerce(given)
+        if reason:
+            problems.append(reason)
+            value = spec.default
+        if isinstance(value, list) and not value:  # no element type: declared without a value
+            node.declare_parameter(spec.name, Parameter.Type.STRING_ARRAY, spec.descriptor(),
+                                   ignore_override=True)
+        else:
+            node.declare_parameter(spec.name, value, spec.descriptor(), ignore_override=True)
+        values[spec.name] = value
     if problems:
         raise InvalidParameter('; '.join(problems))
+    by_name = {s.name: s for s in specs}
+    node.add_pre_set_parameters_callback(lambda params: coerce_numbers(by_name, params))
     return values
+
+
+def coerce_numbers(specs: Dict[str, Param], params: List[Any]) -> List[Any]:
+    """Pre-set callback body: an integer set on a float parameter becomes that float."""
+    out = []
+    for p in params:
+        spec = specs.get(p.name)
+        if spec is not None and isinstance(spec.default, float) and isinstance(p.value, int) \
+                and not isinstance(p.value, bool):
+            p = Parameter(p.name, value=float(p.value))
+        out.append(p)
+    return out
 
 
 def validate(specs: Dict[str, Param], params: List[Any],
@@ -133,19 +215,29 @@ def make_executor(context: Any = None) -> Any:
 
 def spin(node: Any, executor: Any = None) -> None:
     """
-    Spin ``node`` until its context shuts down (the body of the Jazzy ``rclpy.spin`` idiom).
+    Spin ``node`` until a stop is requested or its context shuts down.
 
     ``rclpy.spin`` calls ``spin_once()`` without a timeout, and Jazzy's EventsExecutor turns
-    that (and its own ``spin()``) into a busy loop that also ignores Ctrl-C (measured: ~40 % of
-    a core while idle). ``spin_once`` with a timeout sleeps properly and lets SIGINT through.
+    that (and its own ``spin()``) into a busy loop (measured: ~40 % of a core while idle).
+    ``spin_once`` with a timeout sleeps properly, and the loop sees ``STOP`` within 0.2 s.
     """
     executor = executor or make_executor(node.context)
     executor.add_node(node)
     try:
-        while node.context.ok():
+        while node.context.ok() and not STOP.is_set():
             executor.spin_once(timeout_sec=0.2)
     finally:
         executor.remove_node(node)
+
+
+def status_name(node: Any, what: str) -> str:
+    """
+    Return a DiagnosticStatus name ``<fully qualified node name>: <what>``.
+
+    The ``diagnostic_updater`` convention (with ``use_fqn``): instances in different
+    namespaces (``/imu0/allan_node: inputs``, ``/imu1/allan_node: inputs``) stay apart.
+    """
+    return f'{node.get_fully_qualified_name()}: {what}'
 
 
 def publish_status(node: Any, publisher: Any, name: str, level: int, message: str,
@@ -157,41 +249,55 @@ def publish_status(node: Any, publisher: Any, name: str, level: int, message: st
                                        [status]))
 
 
-def publish_input_health(node: Any, name: str) -> None:
-    """Publish ``node.health_status()`` as the ``<name>: inputs`` status on ``node.diag_pub``."""
+def publish_input_health(node: Any) -> None:
+    """Publish ``node.health_status()`` as the ``<fqn>: inputs`` status on ``node.diag_pub``."""
     level, message, values = node.health_status()
-    publish_status(node, node.diag_pub, f'{name}: inputs', level, message,
-                   node.p['hardware_id'], values)
+    publish_status(node, node.diag_pub, status_name(node, 'inputs'), level, message,
+                   node.hardware_id, values)
 
 
 def run_node(factory: Callable[[], Any], name: str,
-             errors: Tuple[Type[BaseException], ...] = (InvalidParameter,),
-             error_prefix: str = 'invalid parameter: ', spin_fn: Callable[[Any], None] = spin,
-             on_exit: Optional[Callable[[Any], None]] = None, args=None) -> int:
+             errors: Tuple[Type[BaseException], ...] = (),
+             on_exit: Optional[Callable[[Any], None]] = None, args=None,
+             executor_type: Optional[Callable[..., Any]] = None) -> int:
     """
-    Run one node the Jazzy way: init, spin until Ctrl-C or shutdown, tear down; the exit code.
+    Run one node process: init, spin until SIGINT / SIGTERM, stop in order; the exit code.
 
+    rclpy is initialised without its signal handlers: ``STOP`` takes the signals, the spin
+    loop ends, ``on_exit(node)`` runs while the context is still valid (cancel and join
+    workers, write a last checkpoint), then the node and the context are torn down; exit 0.
     ``errors`` raised while building or spinning the node (a refused parameter, a bad config)
-    print one line ``<name>: <error_prefix><error>`` and give exit code 2. ``on_exit(node)``
-    runs before the node is destroyed (e.g. a last checkpoint).
+    and unusable ``--ros-args`` print one line ``<name>: <reason>`` on stderr; exit 2.
+    ``InvalidParameter`` is always one of them. ``executor_type(context=...)`` replaces
+    ``make_executor``'s choice.
     """
-    rclpy.init(args=args)
-    node = None
+    STOP.install()
     try:
-        node = factory()
-        spin_fn(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except errors as exc:
-        print(f'{name}: {error_prefix}{exc}', flush=True)
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as exc:  # rclpy's RCLError: --ros-args that rcl cannot parse
+        print(f'{name}: invalid arguments: {str(exc).splitlines()[0]}', file=sys.stderr,
+              flush=True)
         return 2
+    node = None
+    code = 0
+    try:
+        if not STOP.is_set():
+            node = factory()
+            spin(node, executor_type(context=node.context) if executor_type else None)
+    except (Interrupted, KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (InvalidParameter, *errors) as exc:
+        prefix = 'invalid parameter: ' if isinstance(exc, InvalidParameter) else ''
+        print(f'{name}: {prefix}{exc}', file=sys.stderr, flush=True)
+        code = 2
     finally:
         if node is not None:
             if on_exit is not None:
                 on_exit(node)
             node.destroy_node()
         rclpy.try_shutdown()
-    return 0
+        STOP.ignore_from_now()
+    return code
 
 
 def split_at_markers(items: Sequence[Tuple]) -> List[List[Tuple]]:

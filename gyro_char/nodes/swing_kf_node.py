@@ -4,19 +4,23 @@ swing_kf_node: live swing-stand calibration of one gyro axis against the stand e
 Per message the callbacks only check the stamp (``StreamHealth.admit``) and append
 ``(stamp, receive time, value)`` to a deque; a timer drains the deques every
 ``processing_period_s`` and feeds the chunks to ``SwingOnline`` (the core aligns the streams by
-their header stamps). Estimates go out on ``~/estimates`` at ``publish_rate_hz``; input health
-and convergence on ``/diagnostics`` at 1 Hz.
+their header stamps). Estimates go out on ``~/estimates`` at ``publish_rate_hz``, with the stamp
+their bias refers to (``bias_epoch_s``) and the ``converged`` flag judged from their own sigmas
+(``live.convergence``); input health and convergence on ``/diagnostics`` at 1 Hz.
 """
 from collections import deque
+import math
 import time
 from typing import Any, Dict, List
 
 from diagnostic_msgs.msg import DiagnosticArray
+from gyro_char.live.convergence import Convergence
 from gyro_char.live.status import InputStatus
 from gyro_char.live.stream_health import DROP, RESTART, stream_skew_s, StreamHealth
 from gyro_char.live.swing_online import SwingOnline
 from gyro_char.nodes.common import (declare, Param, publish_input_health, publish_status,
-                                    RELIABLE_10, run_node, sensor_qos, split_at_markers, validate)
+                                    RELIABLE_10, run_node, sensor_qos, split_at_markers,
+                                    status_name, validate)
 from gyro_char.swing.model import SwingNoise
 from msg_adapters import joint_angle, stamp_seconds
 from msg_adapters.diagnostics import OK, WARN
@@ -49,7 +53,19 @@ PARAMS = [
           'gyro white rate noise density (rad/sqrt(s)); 0 = estimate from the data', low=0.0,
           high=1.0),
     Param('frame_id', '', 'expected Imu header.frame_id ("" = accept any)'),
-    Param('hardware_id', 'gyro', 'hardware_id reported in /diagnostics'),
+    Param('hardware_id', '', 'hardware_id reported in /diagnostics ("" = the resolved IMU '
+          'topic name, which differs per instance)'),
+    Param('converged_rel_sigma', 0.25, 'converged: the sigma of every estimate at most this '
+          'fraction of its magnitude (or within its absolute tolerance below)', low=0.0,
+          high=1e3),
+    Param('converged_scale_factor_error_sigma', 0.0, 'converged: scale-factor error sigma '
+          'accepted whatever its value (0 = relative rule only)', low=0.0, high=1.0),
+    Param('converged_bias_sigma_rad_s', 0.0, 'converged: bias sigma (rad/s) accepted whatever '
+          'its value (0 = relative rule only)', low=0.0, high=1e3),
+    Param('converged_bias_drift_sigma_rad_s2', 0.0, 'converged: bias drift sigma (rad/s^2) '
+          'accepted whatever its value (0 = relative rule only)', low=0.0, high=1e3),
+    Param('converged_periods', 3.0, 'converged: the sigma rule must hold without a break over '
+          'this many swing periods of data', low=0.0, high=1e5),
     Param('stall_timeout_s', 1.0, 'a stream silent this long is reported stalled (s)',
           low=0.01, high=3600.0),
     Param('max_skew_s', 0.05, 'largest tolerated difference between the stamp-to-arrival '
@@ -61,6 +77,10 @@ SPECS = {p.name: p for p in PARAMS}
 # Changing these restarts the filter (the accumulated information refers to the old setting).
 RESTARTING = {'axis', 'joint_name', 'joint_index', 'period_s', 'encoder_noise_rad',
               'gyro_noise_density_rad_sqrt_s'}
+# Changing these judges convergence afresh (the filter keeps its information).
+CONVERGENCE = {'converged_rel_sigma', 'converged_scale_factor_error_sigma',
+               'converged_bias_sigma_rad_s', 'converged_bias_drift_sigma_rad_s2',
+               'converged_periods'}
 
 
 class SwingKfNode(Node):
@@ -81,7 +101,9 @@ class SwingKfNode(Node):
         self.status = InputStatus()
         self._configure()
         depth = self.p['input_queue_depth']
-        self.create_subscription(Imu, self.p['imu_topic'], self._on_imu, sensor_qos(depth))
+        sub = self.create_subscription(Imu, self.p['imu_topic'], self._on_imu,
+                                       sensor_qos(depth))
+        self.imu_topic = sub.topic_name  # resolved: namespace and remapping applied
         self.create_subscription(JointState, self.p['encoder_topic'], self._on_encoder,
                                  sensor_qos(depth))
         self.estimates_pub = self.create_publisher(DiagnosticArray, '~/estimates', RELIABLE_10)
@@ -103,9 +125,23 @@ class SwingKfNode(Node):
         noise = SwingNoise(p['encoder_noise_rad'] or None,
                            p['gyro_noise_density_rad_sqrt_s'] or None)
         self.core = SwingOnline(p['period_s'], noise)
+        self._configure_convergence()
         for h in (self.imu_health, self.enc_health):
             h.max_rate_hz = p['max_rate_hz']
         self.imu_health.frame_id = p['frame_id']
+
+    def _configure_convergence(self) -> None:
+        p = self.p
+        self.convergence = Convergence(p['period_s'], rel_sigma=p['converged_rel_sigma'],
+                                       periods=p['converged_periods'], abs_sigma={
+            'scale_factor_error': p['converged_scale_factor_error_sigma'],
+            'bias': p['converged_bias_sigma_rad_s'],
+            'bias_drift': p['converged_bias_drift_sigma_rad_s2']})
+
+    @property
+    def hardware_id(self) -> str:
+        """Return the hardware_id of this node's statuses (default: the IMU topic)."""
+        return self.p['hardware_id'] or self.imu_topic
 
     def _validate(self, params: List[Any]):
         return validate(SPECS, params, current=self.p)
@@ -119,6 +155,8 @@ class SwingKfNode(Node):
             for h in (self.imu_health, self.enc_health):
                 h.max_rate_hz = self.p['max_rate_hz']
             self.imu_health.frame_id = self.p['frame_id']
+            if names & CONVERGENCE:
+                self._configure_convergence()
         if 'publish_rate_hz' in names:
             self.destroy_timer(self._publish_timer)
             self._publish_timer = self.create_timer(1.0 / self.p['publish_rate_hz'],
@@ -195,13 +233,22 @@ class SwingKfNode(Node):
     # -- outputs -------------------------------------------------------------------------------
 
     def estimate_values(self) -> Dict[str, Any]:
-        """Return the current estimates as diagnostics key/values (SI units in the keys)."""
+        """
+        Return the current estimates as diagnostics key/values (SI units in the keys).
+
+        ``bias_epoch_s`` is the stamp (s) the bias refers to: the first sample since the
+        filter (re)started; the bias at stamp t is bias + bias_drift (t - bias_epoch_s).
+        Judges convergence (``Convergence.update``) at the newest gyro stamp.
+        """
         e = self.core.estimates()
+        converged = self.convergence.update(e, self._fed_last.get('imu', math.nan))
+        t_ref = self.core.t_ref
         return {
             'scale_factor_error': e.scale_factor_error.value,
             'scale_factor_error_sigma': e.scale_factor_error.sigma,
             'bias_rad_s': e.bias.value,
             'bias_sigma_rad_s': e.bias.sigma,
+            'bias_epoch_s': math.nan if t_ref is None else float(t_ref),
             'bias_drift_rad_s2': e.bias_drift.value,
             'bias_drift_sigma_rad_s2': e.bias_drift.sigma,
             'amplitude_encoder_rad': e.amplitude_encoder.value,
@@ -211,7 +258,7 @@ class SwingKfNode(Node):
             'period_s': e.period_s,
             'samples_gyro': e.samples_gyro,
             'samples_encoder': e.samples_encoder,
-            'converged': bool(e.converged),
+            'converged': converged,
             'noise_encoder_rad': e.noise_encoder_rad,
             'noise_gyro_rad_sqrt_s': e.noise_gyro_arw,
         }
@@ -219,10 +266,15 @@ class SwingKfNode(Node):
     def publish_estimates(self) -> None:
         """Publish ``~/estimates`` (one status: OK when converged, WARN before)."""
         values = self.estimate_values()
-        level = OK if values['converged'] else WARN
-        msg = 'converged' if values['converged'] else 'not converged yet'
-        publish_status(self, self.estimates_pub, f'{NAME}: estimates', level, msg,
-                       self.p['hardware_id'], values)
+        if values['converged']:
+            level, msg = OK, 'converged'
+        else:
+            level = WARN
+            msg = 'not converged yet'
+            if self.convergence.unmet:
+                msg += ': sigma above tolerance for ' + ', '.join(self.convergence.unmet)
+        publish_status(self, self.estimates_pub, status_name(self, 'estimates'), level, msg,
+                       self.hardware_id, values)
         self._converged = values['converged']
 
     def health_status(self) -> tuple:
@@ -251,7 +303,7 @@ class SwingKfNode(Node):
 
     def publish_diagnostics(self) -> None:
         """Publish the input health and convergence on ``/diagnostics``."""
-        publish_input_health(self, NAME)
+        publish_input_health(self)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
         self._imu_q.clear()

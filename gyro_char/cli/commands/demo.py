@@ -143,8 +143,9 @@ def run(args) -> int:
                     f'{args.live_rate_factor:g}x real time over DDS (seed {args.seed}); the '
                     f'filter used {live["samples_gyro"]} gyro + {live["samples_encoder"]} '
                     f'encoder samples of {sent} each, converged {bool(live["converged"])}')
-        if got < 0.99 * sent:
-            text.append(f'warning: {100 * (1 - got / sent):.0f} % of the live samples were '
+        if got < sent:
+            text.append(f'warning: {sent - got} of the live samples '
+                        f'({100 * (1 - got / sent):.2g} %) were '
                         'lost (best-effort transport on a loaded machine); a gyro angle '
                         'integrated across lost samples is wrong, so the live column is not '
                         'comparable - use a smaller --live-rate-factor')
