@@ -36,4 +36,4 @@ def test_auto_at_startup_exits_2_with_the_reason():
                                                         'sensor_filter:=auto'],
                           env=ros_env(DOMAIN), capture_output=True, timeout=60)
     assert proc.returncode == 2
-    assert b'sensor_filter auto needs the samples' in proc.stdout
+    assert b'sensor_filter auto needs the samples' in proc.stderr  # one line, on stderr
