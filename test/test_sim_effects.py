@@ -14,7 +14,7 @@ CATALOGUE = {
     'internal_lowpass', 'time_delay', 'timestamp_jitter', 'bias_instability',
     'rate_random_walk', 'gauss_markov', 'quantization', 'temperature_drift',
     'scale_factor_nonlinearity', 'scale_factor_asymmetry', 'cross_axis', 'g_sensitivity',
-    'vibration', 'encoder_cyclic_error'}
+    'vibration', 'resonance', 'encoder_cyclic_error'}
 
 
 def _quiet(rate=100.0, white=0.0):

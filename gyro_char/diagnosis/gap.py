@@ -47,6 +47,18 @@ def sim_stats(repeats: Sequence[Obs]) -> SimStats:
     return SimStats(mean=mean, std=std, repeats=list(repeats))
 
 
+def leave_out(stats, k: int):
+    """
+    Return the statistics without repeat k: what a left-out repeat is scored against.
+
+    Closed-form statistics (``exact``: their mean and spread do not come from the repeats) are
+    returned as they are.
+    """
+    if getattr(stats, 'exact', False):
+        return stats
+    return sim_stats(stats.repeats[:k] + stats.repeats[k + 1:])
+
+
 def zscores(real: Obs, stats: SimStats, ref: Optional[Obs] = None) -> Obs:
     """Scores of ``real`` against the twins' mean, in ``ref`` scatter (default: their own)."""
     scale = stats.std if ref is None else ref
@@ -111,12 +123,12 @@ def null_gaps(stats: Sequence[SimStats],
     out = []
     for k in range(k_max):
         reals = [s.repeats[k] for s in stats]
-        others = [sim_stats(s.repeats[:k] + s.repeats[k + 1:]) for s in stats]
+        others = [leave_out(s, k) for s in stats]
         if yardstick is not None:
             refs = yardstick(k)
         elif ref_stats is None:
             refs = [o.std for o in others]
         else:
-            refs = [sim_stats(r.repeats[:k] + r.repeats[k + 1:]).std for r in ref_stats]
+            refs = [leave_out(r, k).std for r in ref_stats]
         out.append(multi_gap(reals, others, refs))
     return np.asarray(out)

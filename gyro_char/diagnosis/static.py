@@ -28,7 +28,7 @@ import numpy as np
 # Effects a static record can reveal. (scale-factor, cross-axis, g-sensitivity, time delay and
 # encoder effects need motion or an encoder; a static record cannot tell them from bias.)
 STATIC_EFFECTS = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gauss_markov',
-                  'quantization', 'temperature_drift', 'vibration')
+                  'quantization', 'temperature_drift', 'vibration', 'resonance')
 TAU_REF = 1.0  # s, where N is read off the Allan curve
 NUISANCE = 'baseline_white_noise'  # pseudo-effect: scale on the baseline N, tuned per model
 PRESET = 'adis16405'  # only its structure is used: every number that matters is overridden
@@ -148,10 +148,16 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     # The most prominent narrow peak, however weak: if a tone is there at all, that is where.
     tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1)
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
+    df = 1.0 / (obs.welch_segment(n) * dt)
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
     k_long = sig_long / np.sqrt(tau_max)
+    # Upper bounds from the record itself as well: on a long record a strong random walk or
+    # flicker floor can sit far above 30x the white noise's Allan deviation at the longest tau.
+    adev_long = float(obs.overlapping_adev(y, np.array([obs.octave_m(n)[-1]]))[0])
+    b_hi = max(30.0 * sig_long, 3.0 * adev_long / 0.664)
+    k_hi = max(30.0 * k_long, 3.0 * adev_long * np.sqrt(3.0 / tau_max))
     spaces = {
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
         # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline.
@@ -159,11 +165,11 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
             fixed={'decimation': 8.0}),
         'bias_instability': EffectSpace('bias_instability', [
-            Param('B', 0.1 * sig_long, 30.0 * sig_long)]),
+            Param('B', 0.1 * sig_long, b_hi)]),
         'rate_random_walk': EffectSpace('rate_random_walk', [
-            Param('K', 0.1 * k_long, 30.0 * k_long)]),
+            Param('K', 0.1 * k_long, k_hi)]),
         'gauss_markov': EffectSpace('gauss_markov', [
-            Param('sigma', 0.1 * sig_long, 2.0 * sig_sample),
+            Param('sigma', 0.1 * sig_long, max(2.0 * sig_sample, 3.0 * adev_long)),
             Param('tau_s', 3 * dt, length / 4),
             Param('order', 1, 2, integer=True, choice=True)]),
         # Plain (angle error correlated when the step is coarse) or dithered (white error).
@@ -173,10 +179,18 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'temperature_drift': EffectSpace('temperature_drift', [
             Param('amplitude', 0.3 * sig_long, 3.0 * sig_sample, sign=warm_sign),
             Param('tau_s', length / 200, length / 2)]),
+        # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
+        # line between bins spreads its power differently from one on a bin).
         'vibration': EffectSpace('vibration', [
             Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample),
-            Param('freq_hz', 0.5 * f_tone, 1.5 * f_tone, log=False)],
-            start={'freq_hz': f_tone} if tones.size else {}),
+            Param('freq_hz', *((max(f_tone - 2.0 * df, df), f_tone + 2.0 * df) if tones.size
+                               else (0.5 * f_tone, 1.5 * f_tone)), log=False)]),
+        # A structural mode: band-limited noise around the same peak, of width f0 / q; its
+        # centre is searched (a resonance's largest Welch bin need not be its centre).
+        'resonance': EffectSpace('resonance', [
+            Param('sigma', 0.01 * sig_sample, 2.0 * sig_sample),
+            Param('freq_hz', 0.85 * f_tone, min(1.15 * f_tone, 0.45 / dt), log=False),
+            Param('q', 1.0, 300.0)]),
     }
     return [spaces[k] for k in names]
 

@@ -2,8 +2,10 @@
 The ``diagnose`` job: where the sim-to-real gap lies and what explains it.
 
 Fits the paper's baseline model to each gyro channel of the input record(s), compares them with
-repeated simulated twins on a battery of observables, ranks the catalogue effects and adds them
-greedily (``gyro_char.diagnosis.engine``). Writes ``diagnosis.json`` (docs/design.md: the channel
+the model on a battery of observables - for static records their closed-form expectations over
+the whole record, checked by simulated twins (``diagnose_static``); for swing records
+simulated twins - ranks the catalogue effects and adds them greedily
+(``gyro_char.diagnosis.engine``). Writes ``diagnosis.json`` (docs/design.md: the channel
 with the largest baseline gap at the top level, every channel under the extra ``per_channel``
 field) and ``diagnosis_<channel>.png`` in ``--out``. ``--holdout INPUT`` re-measures, on a
 record the fit never saw, the gap of the baseline and of the baseline + the selected effects
@@ -25,12 +27,16 @@ from typing import List, Optional
 from gyro_char.errors import InputError
 from gyro_char.io import read_imu
 from gyro_char.jobs.base import Console, measurement
+from gyro_char.jobs.diagnose_static import add_static_options, run_static
 from gyro_char.records import GYRO_CHANNELS
 import numpy as np
 
 # The tidy quantities of a diagnosis (all dimensionless gaps and counts).
 QUANTITIES = {'baseline_gap': '1', 'final_gap': '1', 'null_gap_q95': '1',
               'effects_selected': '1'}
+
+# The swing kind still scores candidates on simulated twins: its records are cut to this.
+SWING_MAX_SAMPLES = 2 ** 17
 
 
 def add_options(p, require: bool = True) -> None:
@@ -46,9 +52,12 @@ def add_options(p, require: bool = True) -> None:
     p.add_argument('--holdout', default=None, metavar='INPUT',
                    help='record withheld from the fit, to check the selected model on')
     p.add_argument('--repeats', type=int, default=8,
-                   help='simulated twins per model (the sim scatter; default 8)')
-    p.add_argument('--max-samples', type=int, default=2 ** 17,
-                   help='analyse the first N samples of each record (default 131072)')
+                   help='simulated twins: of the baseline, for the null level (static, '
+                        'closed forms), or per model (swing, static --method twins); '
+                        'default 8')
+    p.add_argument('--max-samples', type=int, default=None,
+                   help='analyse the first N samples of each record (default: static, the '
+                        'whole record; swing, 131072)')
     p.add_argument('--seed', type=int, default=1)
     p.add_argument('--topic', default=None, help='sensor_msgs/Imu topic (bags)')
     p.add_argument('--period', default=None, metavar='SECONDS[,SECONDS...]',
@@ -59,6 +68,7 @@ def add_options(p, require: bool = True) -> None:
                    help='swing: gyro axis along the swing axis (default: the one that swings)')
     p.add_argument('--encoder-topic', default=None,
                    help='swing: sensor_msgs/JointState topic of the stand encoder (bags)')
+    add_static_options(p)
 
 
 def recording_args(path: str) -> dict:
@@ -91,12 +101,9 @@ def _dt(rec) -> float:
 
 def run(args, console: Optional[Console] = None) -> List[dict]:
     """Diagnose ``args.inputs``, write the files in ``args.out``; return the tidy gaps."""
-    from gyro_char.diagnosis import engine as diagnose, static as diag_static
-    from gyro_char.report.diagnosis_plot import plot_diagnosis
-
+    console = console or Console()
     if args.repeats < 4:
         raise InputError('--repeats must be >= 4 (the gap is judged against their scatter)')
-    console = console or Console()
     if args.kind == 'swing':
         return run_swing(args, console)
     recs = [read_imu(p, topic=args.topic, quiet=args.quiet) for p in args.inputs]
@@ -110,19 +117,9 @@ def run(args, console: Optional[Console] = None) -> List[dict]:
         for note in r.notes:
             print(f'note: {r.source}: {note}', file=console.err)
     os.makedirs(args.out, exist_ok=True)
-    per = {}
-    for ch in _channels(recs + ([hold] if hold is not None else []), args.channels):
-        problem = diag_static.static_problem([r.channels[ch] for r in recs], dts[0],
-                                             channel=ch, max_samples=args.max_samples)
-        diag = diagnose.run(problem, repeats=args.repeats, seed=args.seed, quiet=args.quiet)
-        out = diag.to_json()
-        out['channel'] = ch
-        if hold is not None:
-            out['holdout'] = holdout_check(diag, hold.channels[ch], dts[0], ch, args)
-        png = os.path.join(args.out, f'diagnosis_{ch}.png')
-        plot_diagnosis(diag, problem.ranges[0], png, title=f'{ch}: sim-to-real gap')
-        per[ch] = out
-        print(summary(ch, out), file=console.out)
+    channels = _channels(recs + ([hold] if hold is not None else []), args.channels)
+    per = run_static(args, recs, dts, hold, channels,
+                     emit=lambda ch, out: print(summary(ch, out), file=console.out))
     top = max(per, key=lambda c: per[c]['baseline_gap'])
     result = dict(per[top])
     result['per_channel'] = per
@@ -187,7 +184,7 @@ def run_swing(args, console: Console) -> List[dict]:
         once = periods[0] if args.period and ',' not in args.period else None
         hold = _swing_record(args.holdout, once, args, console)
     problem = diag_swing.swing_records_problem(records, axis=args.axis,
-                                               max_samples=args.max_samples)
+                                               max_samples=args.max_samples or SWING_MAX_SAMPLES)
     diag = diagnose.run(problem, repeats=args.repeats, seed=args.seed, quiet=args.quiet)
     out = diag.to_json()
     bases = problem.context
@@ -236,7 +233,8 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
 
     imu, enc, period = hold
     problem = diag_swing.swing_records_problem(
-        [(imu, enc, period)], axis=bases[0].axis, max_samples=args.max_samples,
+        [(imu, enc, period)], axis=bases[0].axis,
+        max_samples=args.max_samples or SWING_MAX_SAMPLES,
         scale_factor=bases[0].scale_factor_error)
     seeds = [args.seed * 1000 + 500 + k for k in range(args.repeats)]
     objective = GapObjective(problem.reals, problem.simulate, seeds)
@@ -254,25 +252,6 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
                        'kalman_scale_factor_error': b.record_scale_factor_error},
             'note': 'effect parameters and the pooled scale-factor error fixed from the fit; '
                     'bias, drift and noise levels of the record are refitted'}
-
-
-def holdout_check(diag, x, dt, channel, args) -> dict:
-    """Gap of the baseline and of the selected model on a record the fit never saw."""
-    from gyro_char.diagnosis import static as diag_static
-    from gyro_char.diagnosis.fit import fit_effect, GapObjective
-
-    problem = diag_static.static_problem([x], dt, channel=channel,
-                                         max_samples=args.max_samples)
-    seeds = [args.seed * 1000 + 500 + k for k in range(args.repeats)]
-    objective = GapObjective(problem.reals, problem.simulate, seeds)
-    effects = [(n, p) for n, p in diag.model if n != diag_static.NUISANCE]
-    _, base = fit_effect(objective, [], problem.nuisance)
-    objective.set_reference(base)
-    _, final = fit_effect(objective, effects, problem.nuisance)
-    return {'baseline_gap': base.gap, 'final_gap': final.gap,
-            'effects': [{'name': n, 'params': p} for n, p in effects],
-            'note': 'effect parameters fixed from the fit; only the baseline white-noise '
-                    'level is refitted on this record'}
 
 
 def summary(channel: str, out: dict) -> str:

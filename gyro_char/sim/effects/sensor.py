@@ -1,5 +1,5 @@
 """
-Sensor effects: internal smoothing, thermal transient, extra noise processes, angle quantization.
+Sensor effects: smoothing, thermal transient, extra noise processes, quantization, tones, modes.
 
 Axis-selecting parameters: ``axis`` -1 means all three gyro axes, 0/1/2 one of x/y/z.
 Effects that map exactly onto an IEEE 952 term (B, K, Q) add it, in quadrature, to the truth of
@@ -300,4 +300,62 @@ class Vibration(Effect):
         gyro = gyro.copy()
         for r in _rows(self):
             gyro[r] += tone
+        return gyro, accel
+
+
+def resonance_coefficients(freq_hz: float, q: float, dt: float):
+    """
+    AR(2) coefficients of a resonance and its innovation variance for unit output variance.
+
+    x_k = a1 x_(k-1) + a2 x_(k-2) + e_k with poles r exp(+-i 2 pi f0 dt), r = exp(-pi f0 dt / Q):
+    white noise through a second-order resonator of centre f0 and -3 dB bandwidth f0 / Q.
+    Returns (a1, a2, var_e), var_e giving a stationary variance of 1.
+    """
+    theta = 2.0 * np.pi * freq_hz * dt
+    r = np.exp(-np.pi * freq_hz * dt / q)
+    a1, a2 = 2.0 * r * np.cos(theta), -r * r
+    gamma0 = (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2) ** 2 - a1 * a1))
+    return float(a1), float(a2), float(1.0 / gamma0)
+
+
+@register
+class Resonance(Effect):
+    """Band-limited rate noise around a frequency: a structural mode excited by broadband noise."""
+
+    name = 'resonance'
+    summary = 'band-limited noise around freq_hz with quality factor q (a structural mode)'
+    physics = ('A lightly damped mode (mount, package, the sense element itself) driven by '
+               'broadband disturbances: white noise through a second-order resonator, '
+               'x_k = a1 x_(k-1) + a2 x_(k-2) + e_k with poles r exp(+-i 2 pi f0 dt), '
+               'r = exp(-pi f0 dt / q), at the internal rate, scaled to standard deviation '
+               'sigma and stationary from the first sample. PSD: a peak of -3 dB width '
+               'f0 / q (a pure tone is the limit q -> infinity, a wide bump q ~ 1); its '
+               'phase wanders, so unlike ``vibration`` its line broadens with record length '
+               'no further than f0 / q.')
+    PARAMS = {'sigma': (0.05 * DEG, 'rad/s', 'stationary standard deviation'),
+              'freq_hz': (20.0, 'Hz', 'centre frequency f0'),
+              'q': (20.0, '-', 'quality factor: f0 / (-3 dB bandwidth)'),
+              'axis': _axis_param(2.0)}
+
+    def check(self):
+        _rows(self)
+        if self.sigma < 0 or self.freq_hz <= 0 or self.q < 0.5:
+            raise InputError('resonance: sigma >= 0, freq_hz > 0 and q >= 0.5')
+
+    def sensor(self, ctx, gyro, accel):
+        if self.freq_hz >= 0.5 / ctx.dt_internal:
+            raise InputError(f'resonance: freq_hz {self.freq_hz:g} is at or above the internal '
+                             f'Nyquist frequency {0.5 / ctx.dt_internal:g} Hz')
+        a1, a2, var_e = resonance_coefficients(self.freq_hz, self.q, ctx.dt_internal)
+        g0 = 1.0
+        g1 = a1 / (1.0 - a2)
+        chol = np.linalg.cholesky(np.array([[g0, g1], [g1, g0]]))
+        rng = self.rng(ctx)
+        gyro = gyro.copy()
+        for r in _rows(self):
+            y1, y2 = chol @ rng.standard_normal(2)       # x_(-1), x_(-2), stationary
+            e = np.sqrt(var_e) * rng.standard_normal(gyro.shape[1])
+            zi = signal.lfiltic([1.0], [1.0, -a1, -a2], y=[y1, y2])
+            x, _ = signal.lfilter([1.0], [1.0, -a1, -a2], e, zi=zi)
+            gyro[r] += self.sigma * x
         return gyro, accel

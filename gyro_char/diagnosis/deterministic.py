@@ -1,0 +1,99 @@
+"""
+The warm-up (a deterministic mean term) seen through the static observables' forms.
+
+A mean term adds to each quadratic form (Allan variance, Welch PSD, lag products) its own
+value on the detrended term, and to each linear form (early-minus-late means) likewise; the
+closed-form expectation (``gyro_char.diagnosis.expected``) adds these to the noise's. The
+forms are evaluated without per-sample loops: a warm-up is smooth on the scale of a Welch
+segment and of the short clusters.
+"""
+from dataclasses import dataclass
+
+from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis.spectra import ModelSpectrum
+import numpy as np
+from scipy import signal
+
+
+@dataclass
+class Deterministic:
+    """Observables' quadratic and linear forms evaluated on the (detrended) mean term."""
+
+    avar: np.ndarray
+    welch: np.ndarray
+    acov: np.ndarray   # r(0..lags) / n sums
+    drift: np.ndarray
+
+
+def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
+    """
+    Evaluate the observables' forms on the detrended warm-up (a smooth mean term), fast.
+
+    Allan variance from 64-sample block means (exact for clusters of whole blocks up to the
+    block-start sampling; below, the smooth signal's (m / 64)^2 law); Welch from the exact
+    per-segment decomposition a_s exp(-j dt / tau) + line (one FFT per term); the lag
+    products from the signal's variance and its increments' (a smooth signal's D(k) = k^2
+    D(1)).
+    """
+    m = g.m
+    n_blocks = len(obs.DRIFT_FRACTIONS)
+    if not spec.warmups:
+        return Deterministic(np.zeros(m.size), np.zeros(g.nps // 2 + 1), np.zeros(lags + 1),
+                             np.zeros(n_blocks))
+    raw = spec.deterministic(g.n)
+    d = obs.detrend(raw)
+    line = raw - d
+    slope = (line[-1] - line[0]) / (g.n - 1)          # per sample
+    blk = 64 if g.n >= 64 * 64 else 1
+    nb = g.n // blk
+    bm = d[:nb * blk].reshape(nb, blk).mean(axis=1)
+    c = np.r_[0.0, np.cumsum(bm)]
+    av = np.zeros(m.size)
+    for i, mm in enumerate(m):
+        if mm < blk:
+            continue
+        k = mm // blk
+        if 2 * k > nb:
+            continue
+        means = (c[k:] - c[:-k]) / k
+        diff = means[k:] - means[:-k]
+        av[i] = 0.5 * float(np.mean(diff * diff))
+    ref = np.flatnonzero(m == blk)
+    if blk > 1 and ref.size:
+        small = m < blk
+        av[small] = av[ref[0]] * (m[small] / blk) ** 2
+    p = _det_welch(spec, g, slope)
+    d1 = float(np.mean(np.diff(d) ** 2))
+    r0 = float(np.dot(d, d)) / g.n
+    acov = r0 - 0.5 * d1 * np.arange(lags + 1) ** 2
+    half = d[g.n // 2:].mean()
+    drift = np.array([d[:max(int(fr * g.n), 1)].mean() - half for fr in obs.DRIFT_FRACTIONS])
+    return Deterministic(av, p, acov, drift)
+
+
+def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
+    """Welch PSD of the detrended warm-up: per segment s, sum_i a_is e_i(j) - slope j."""
+    L = g.nps
+    step = L // 2
+    nseg = (g.n - L) // step + 1
+    w = signal.get_window('hann', L)
+    j = np.arange(L, dtype=np.float64)
+    t0 = np.arange(nseg) * step * g.dt
+    coef, shapes = [], []
+    for amp, tau in spec.warmups:
+        coef.append(spec.deterministic_at(t0, amp, tau))
+        shapes.append(np.exp(-j * g.dt / tau))
+    coef.append(np.full(nseg, -slope))
+    shapes.append(j)
+    spectra_ = []
+    for e in shapes:
+        spectra_.append(np.fft.rfft(w * (e - e.mean())))
+    a = np.array(coef)                      # terms x segments
+    x = np.array(spectra_)                  # terms x bins
+    gram = a @ a.T / nseg
+    p = np.real(np.einsum('ij,ik,jk->k', gram, x, np.conj(x)))
+    scale = np.full(p.size, 2.0)
+    scale[0] = 1.0
+    if L % 2 == 0:
+        scale[-1] = 1.0
+    return p * scale * g.dt / np.dot(w, w)

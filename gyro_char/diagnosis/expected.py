@@ -1,0 +1,308 @@
+"""
+Expected static observables of a twin, in closed form from its spectrum (no simulation).
+
+Every block of ``gyro_char.diagnosis.observables`` is (a function of) a quadratic or linear
+form of the record, so its expectation is a linear functional of the model's PSD S(f)
+(``gyro_char.diagnosis.spectra``), plus the same form evaluated on the deterministic part:
+
+- Allan variance at tau = m dt (sampled data, aliasing included in S):
+  sigma^2(m) = int_0^(fs/2) S(f) 2 sin^4(pi f m dt) / (m^2 sin^2(pi f dt)) df
+  (the continuous kernel sin^4(pi f tau)/(pi f tau)^2 with the discrete cluster average);
+  beyond 32 periods of sin^4 the kernel is replaced by its mean (3/8 of its envelope);
+- Welch PSD (Hann, 50 % overlap): S convolved with the window's |W(f)|^2, on a grid 8 times
+  finer than the segment's bins (the bins used are >= 2, where the segment-mean removal has
+  no effect); lines add |W(f - f0)|^2 exactly;
+- autocorrelation at small lags of the detrended record: (E r(0) - D(k) / 2) / E r(0), with
+  the variogram D(k) = 2 int S (1 - cos 2 pi f k dt) df and E r(0) = int S (1 - G(f T)) df,
+  G = the share of a sinusoid's power the record's least-squares line removes (this keeps
+  random walks and flicker finite);
+- early-minus-late means (``drift``): linear, so the expectation is the deterministic part's.
+
+Spreads (``spread``): chi-square with the Welch and Allan equivalent degrees of freedom
+(Greenhall's EDF per component, combined by Satterthwaite), Bartlett's formula for the
+autocorrelation, the exact variance of the linear ``drift`` forms; the ``tone`` block (a
+running-median prominence, not linear) is sampled from the Welch bins' chi-square law.
+"""
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Dict
+
+from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis.deterministic import Deterministic, deterministic
+from gyro_char.diagnosis.spectra import ModelSpectrum
+import numpy as np
+from scipy import ndimage, signal, special
+
+LN10 = np.log(10.0)
+PERIODS = 32          # sin^4 periods integrated exactly before the kernel is averaged
+FINE = 8              # Welch grid refinement
+TONE_DRAWS = 48       # chi-square draws of the Welch bins for the tone block
+OVERLAP_RHO2 = None   # set by _welch_consts
+
+
+@dataclass(frozen=True)
+class Grids:
+    """Frequency grids and fixed kernels for one record length and sample time."""
+
+    n: int
+    dt: float
+    m: np.ndarray
+    nu_log: np.ndarray            # global log grid in cycles/sample, (0, 1/2]
+    exact: list                   # per m: (nu grid, kernel) of the exact region
+    welch_nu: np.ndarray          # fine Welch grid, cycles/sample, [0, 1)
+    welch_w2: np.ndarray          # |W|^2 on that grid (periodic)
+    nps: int
+    k_eff: float                  # equivalent number of independent Welch segments
+    g_detrend: np.ndarray         # 1 - G(f T) on nu_log
+    low_bins: np.ndarray          # |C_k|^2 on the Welch grid for bins 0, 1 (mean removed)
+
+
+def _detrend_keep(x: np.ndarray) -> np.ndarray:
+    """1 - G(x): share of a sinusoid of x cycles per record left after the LS line."""
+    a = 2.0 * np.pi * np.asarray(x, dtype=np.float64)
+    out = np.empty_like(a)
+    small = a < 0.5
+    # Series for small a (G = 1 - a^4 / 720 + ...), exact elsewhere.
+    s = a[small]
+    out[small] = s ** 4 / 720.0 - s ** 6 / 33600.0
+    b = a[~small]
+    e = np.exp(1j * b)
+    i0 = (e - 1.0) / (1j * b)
+    i1 = e / (1j * b) + (e - 1.0) / b ** 2 - 0.5 * i0
+    out[~small] = 1.0 - (np.abs(i0) ** 2 + 12.0 * np.abs(i1) ** 2)
+    return np.clip(out, 0.0, 1.0)
+
+
+@lru_cache(maxsize=8)
+def grids(n: int, dt: float) -> Grids:
+    m = obs.octave_m(n)
+    lo = 0.01 / n
+    nu_log = np.geomspace(lo, 0.5, 6000)
+    exact = []
+    for mm in m:
+        top = min(0.5, PERIODS / mm)
+        step = 1.0 / 128
+        u = np.r_[np.geomspace(1e-4, step, 60)[:-1], np.arange(step, top * mm, step), top * mm]
+        nu = u / mm
+        s = np.sin(np.pi * nu)
+        ker = 2.0 * np.sin(np.pi * nu * mm) ** 4 / (mm * mm * s * s)
+        exact.append((nu, ker))
+    nps = obs.welch_segment(n)
+    size = FINE * nps
+    w = signal.get_window('hann', nps)
+    w2 = np.abs(np.fft.fft(w, size)) ** 2
+    segs = (n - nps) // (nps // 2) + 1
+    rho = float(np.dot(w[:nps // 2], w[nps // 2:]) / np.dot(w, w))
+    k_eff = segs / (1.0 + 2.0 * rho * rho * (segs - 1) / segs)
+    keep = _detrend_keep(nu_log * n)
+    nu_w = np.arange(size) / size
+    low = []
+    for k in (0, 1):
+        d = _dirichlet(nu_w, nps)
+        c = _hann_w(nu_w - k / nps, nps) - _hann_w(np.array([-k / nps]), nps)[0] * d / nps
+        low.append(np.abs(c) ** 2)
+    return Grids(low_bins=np.array(low), n=n, dt=dt, m=m, nu_log=nu_log, exact=exact,
+                 welch_nu=np.arange(size) / size, welch_w2=w2, nps=nps, k_eff=k_eff,
+                 g_detrend=keep)
+
+
+def _trapz(y, x):
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)))
+
+
+def avar(spec: ModelSpectrum, g: Grids, parts=None) -> np.ndarray:
+    """Return the expected Allan variance of the stochastic part at the grid's cluster sizes."""
+    dt = g.dt
+    out = np.empty(g.m.size)
+    nu = spec.refine(g.nu_log)
+    s_log = spec.one_sided(nu / dt, parts) / dt
+    sn = np.sin(np.pi * nu)
+    avg = s_log * 0.75 / (sn * sn)
+    cum = np.r_[0.0, np.cumsum(0.5 * (avg[1:] + avg[:-1]) * np.diff(nu))]
+    for i, mm in enumerate(g.m):
+        nu_e, ker = g.exact[i]
+        if spec.peaks:
+            nu_e = spec.refine(nu_e)
+            nu_e = nu_e[nu_e <= g.exact[i][0][-1]]
+            s = np.sin(np.pi * nu_e)
+            ker = 2.0 * np.sin(np.pi * nu_e * mm) ** 4 / (mm * mm * s * s)
+        val = _trapz(spec.one_sided(nu_e / dt, parts) / dt * ker, nu_e)
+        top = PERIODS / mm
+        if top < 0.5:
+            val += (cum[-1] - np.interp(top, nu, cum)) / (mm * mm)
+        out[i] = val
+    if parts is None:
+        for f0, power in spec.lines:
+            x = f0 * dt
+            if np.sin(np.pi * x) ** 2 < 1e-12:
+                continue        # a line at DC: the record's line fit removes it
+            out += power * 2.0 * np.sin(np.pi * x * g.m) ** 4 / (g.m ** 2 * np.sin(np.pi * x) ** 2)
+    return out
+
+
+def welch_expected(spec: ModelSpectrum, g: Grids):
+    """Return the expected one-sided Welch PSD at the segment's bins: (noise part, line part)."""
+    dt = g.dt
+    size = g.welch_nu.size
+    nu = g.welch_nu
+    f = np.minimum(nu, 1.0 - nu) / dt
+    s_two = np.zeros(size)
+    pos = f > 0
+    s_two[pos] = 0.5 * spec.one_sided(f[pos]) / dt     # two-sided per cycle/sample
+    conv = np.real(np.fft.ifft(np.fft.fft(s_two) * np.fft.fft(g.welch_w2))) / size
+    w = signal.get_window('hann', g.nps)
+    norm = dt / np.dot(w, w)
+    bins = np.arange(g.nps // 2 + 1)
+    e = conv[bins * FINE] * norm
+    scale = np.full(bins.size, 2.0)
+    scale[0] = 1.0
+    if g.nps % 2 == 0:
+        scale[-1] = 1.0
+    # Bins 0 and 1: the segment mean is removed before windowing, which the plain window
+    # kernel ignores there (bins >= 2 of a Hann window are untouched by it).
+    e[:2] = g.low_bins @ s_two / size * norm
+    noise = e * scale
+    lines = np.zeros(bins.size)
+    for f0, power in spec.lines:
+        x = f0 * dt
+        for sgn in (1.0, -1.0):
+            lines += 0.5 * power * _hann_w2(bins / g.nps - sgn * x, g.nps) * norm
+    return noise, lines * scale
+
+
+def _dirichlet(v, L):
+    """sum_(j<L) exp(-2 pi i v j)."""
+    z = np.exp(-2j * np.pi * np.asarray(v, dtype=np.float64))
+    near = np.abs(1.0 - z) < 1e-12
+    return np.where(near, L, (1.0 - z ** L) / np.where(near, 1.0, 1.0 - z))
+
+
+def _hann_w(nu, L):
+    """DFT W(nu) of the periodic Hann window of length L (cycles/sample)."""
+    return 0.5 * _dirichlet(nu, L) - 0.25 * _dirichlet(nu - 1.0 / L, L) \
+        - 0.25 * _dirichlet(nu + 1.0 / L, L)
+
+
+def _hann_w2(nu, L):
+    """|W(nu)|^2 of the periodic Hann window of length L (cycles/sample)."""
+    return np.abs(_hann_w(nu, L)) ** 2
+
+
+def acf_integrals(spec: ModelSpectrum, g: Grids, lags: int):
+    """E r(0) of the detrended record and the variogram D(k), k = 1..lags (stochastic part)."""
+    nu = spec.refine(g.nu_log)
+    s = spec.one_sided(nu / g.dt) / g.dt
+    keep = g.g_detrend if nu.size == g.nu_log.size else _detrend_keep(nu * g.n)
+    r0 = _trapz(s * keep, nu)
+    k = np.arange(1, lags + 1)
+    dk = np.array([2.0 * _trapz(s * (1.0 - np.cos(2.0 * np.pi * nu * kk)), nu) for kk in k])
+    for f0, power in spec.lines:
+        x = f0 * g.dt
+        r0 += power * float(_detrend_keep(np.array([x * g.n]))[0])
+        dk += 2.0 * power * (1.0 - np.cos(2.0 * np.pi * x * k))
+    return r0, dk
+
+
+def tone_block(noise: np.ndarray, lines: np.ndarray, g: Grids, layout) -> np.ndarray:
+    """
+    Tone prominence per band for ``TONE_DRAWS`` chi-square draws of the Welch bins.
+
+    The running median (~1/10 of the band wide) of a draw is that of the expected spectrum
+    times the median of the bins' chi-square law (its own spread over ~100 bins is a few
+    per cent of a bin's); the draws then only need the bins themselves.
+    """
+    z, ratio, med = tone_draws(g.nps // 2 + 1, round(g.k_eff, 1))
+    # Noise bins: scaled chi-square (2 k_eff degrees of freedom); a line's bins: its power
+    # plus the noise, with the line-noise cross term's spread.
+    p = noise * ratio + lines + np.sqrt(2.0 * lines * noise / g.k_eff) * z
+    p = np.maximum(p, 1e-300)
+    size = max(31, (p.shape[1] // 10) | 1)
+    base = np.broadcast_to(ndimage.median_filter(noise + lines, size=size, mode='nearest')
+                           * med, p.shape).copy()
+    # Within half a window of either end the 'nearest' padding repeats one noisy bin: there
+    # the draws' own running median is taken.
+    half = size // 2
+    if p.shape[1] > 4 * size:
+        base[:, :half] = _edge_median(p[:, :size], half)
+        base[:, -half:] = _edge_median(p[:, ::-1][:, :size], half)[:, ::-1]
+    prom = np.log10(p / np.maximum(base, 1e-300))
+    f = np.arange(p.shape[1]) / (g.nps * g.dt)
+    out = np.empty((p.shape[0], len(layout.ranges['tone'])))
+    for i, (lo, hi) in enumerate(layout.ranges['tone']):
+        sel = (f > max(lo, f[1])) & (f <= hi)
+        out[:, i] = prom[:, sel].max(axis=1) if sel.any() else 0.0
+    return out
+
+
+def _edge_median(p: np.ndarray, half: int) -> np.ndarray:
+    """Return the running median of the first ``half`` columns, the first one padded."""
+    size = 2 * half + 1
+    padded = np.concatenate([np.repeat(p[:, :1], half, axis=1), p], axis=1)
+    win = np.lib.stride_tricks.sliding_window_view(padded, size, axis=1)[:, :half]
+    return np.median(win, axis=2)
+
+
+@lru_cache(maxsize=4)
+def tone_draws(bins: int, k_eff: float):
+    """
+    Return common draws of the Welch bins (fixed seed, the same for every model).
+
+    Normals with the correlation of neighbouring Hann bins (4/9, 1/36), the same mapped to
+    chi-square / dof with 2 k_eff degrees of freedom, and that law's median.
+    """
+    rng = np.random.default_rng(20240613)
+    ma = _bin_ma()
+    e = rng.standard_normal((TONE_DRAWS, bins + 2))
+    z = ma[0] * e[:, 2:] + ma[1] * e[:, 1:-1] + ma[2] * e[:, :-2]
+    ratio = special.gammaincinv(k_eff, special.ndtr(z)) / k_eff
+    return z, ratio, float(special.gammaincinv(k_eff, 0.5) / k_eff)
+
+
+@lru_cache(maxsize=1)
+def _bin_ma() -> np.ndarray:
+    from scipy import optimize
+    target = np.array([1.0, 4.0 / 9.0, 1.0 / 36.0])
+
+    def res(b):
+        return [b @ b - 1.0, b[0] * b[1] + b[1] * b[2] - target[1], b[0] * b[2] - target[2]]
+    return optimize.fsolve(res, [0.8, 0.5, 0.05])
+
+
+def psd_bins(layout, g: Grids):
+    """Welch bin indices of each log-spaced PSD bin (as the observable selects them)."""
+    f = np.arange(g.nps // 2 + 1) / (g.nps * g.dt)
+    edges = layout.ranges['psd']
+    out = []
+    for i, (lo, hi) in enumerate(edges):
+        sel = (f >= lo) & (f < hi) if i < len(edges) - 1 else (f >= lo) & (f <= hi)
+        out.append(np.flatnonzero(sel))
+    return out
+
+
+def expected_blocks(spec: ModelSpectrum, layout, det: Deterministic = None,
+                    log_bias: np.ndarray = None) -> Dict[str, np.ndarray]:
+    """
+    Return the expected value of every static block of a twin described by ``spec``.
+
+    ``log_bias``: E[log10 adev] - log10 sqrt(E[AVAR]) per tau (from the EDF; 0 if None).
+    """
+    g = grids(layout.n, layout.dt)
+    lags = obs.ACF_LAGS
+    if det is None:
+        det = deterministic(spec, g, lags)
+    av = avar(spec, g) + det.avar
+    adev = 0.5 * np.log10(np.maximum(av, 1e-300)) + (0.0 if log_bias is None else log_bias)
+    noise, lines = welch_expected(spec, g)
+    total = noise + lines + det.welch
+    bins = psd_bins(layout, g)
+    f = np.arange(total.size) / (g.nps * g.dt)
+    psd = np.array([total[b].mean() if b.size else
+                    np.interp(0.5 * (lo + hi), f, total)
+                    for b, (lo, hi) in zip(bins, layout.ranges['psd'])])
+    tone = tone_block(noise + det.welch, lines, g, layout)
+    r0, dk = acf_integrals(spec, g, lags)
+    k = np.arange(1, lags + 1)
+    e0 = r0 + det.acov[0]
+    acf = (1.0 - k / g.n) * (e0 - 0.5 * dk + det.acov[1:] - det.acov[0]) / e0
+    return {'adev': adev, 'psd': np.log10(np.maximum(psd, 1e-300)), 'tone': tone.mean(axis=0),
+            'acf': acf, 'drift': det.drift.copy()}

@@ -1,0 +1,201 @@
+"""
+Power spectral densities of the static twin, in closed form: baseline plus catalogue effects.
+
+A static twin (``gyro_char.diagnosis.static``) is a linear, Gaussian chain except for the
+output rounding: white rate noise and the noise effects are generated at the internal rate
+``dt / D``, pass the sensor's smoothing filter ``h`` (``internal_lowpass``), are decimated by
+``D``, then get the angle quantization (``quantization``) and the output step ``lsb``. Each
+stage has an exact discrete-time PSD, so the twin's output PSD is
+
+    S_out(f) = sum_r |H(f + r fs)|^2 S_int(f + r fs) + S_q(f) + S_lsb(f),   r = 0..D-1
+
+(decimation folds the D images of the internal band; two-sided, per Hz). Tones are lines,
+folded the same way; a warm-up is a deterministic mean term. ``ModelSpectrum`` holds the result
+for one model; every observable's expectation is a linear functional of it
+(``gyro_char.diagnosis.expected``). The output step is taken as white rounding noise
+(lsb^2 / 12 per sample), exact enough when the per-sample noise exceeds half a step.
+"""
+from dataclasses import dataclass, field
+from typing import Callable, List, Optional, Sequence, Tuple
+
+from gyro_char.allan.expected import moving_average_kernel
+from gyro_char.sim.effects.sensor import resonance_coefficients
+import numpy as np
+
+# Effects whose static output has a closed form here.
+CLOSED_FORM = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gauss_markov',
+               'quantization', 'temperature_drift', 'vibration', 'resonance')
+
+
+def _ar1(sigma: float, tau_s: float, dt: float, order: int) -> Callable:
+    a = np.exp(-dt / tau_s)
+
+    def psd(f):
+        den = 1.0 - 2.0 * a * np.cos(2.0 * np.pi * f * dt) + a * a
+        if order == 2:
+            return sigma ** 2 * (1.0 - a * a) ** 3 / (1.0 + a * a) * dt / den ** 2
+        return sigma ** 2 * (1.0 - a * a) * dt / den
+    return psd
+
+
+def _resonance(sigma: float, freq_hz: float, q: float, dt: float) -> Callable:
+    a1, a2, var_e = resonance_coefficients(freq_hz, q, dt)
+
+    def psd(f):
+        z = np.exp(-2j * np.pi * f * dt)
+        return sigma ** 2 * var_e * dt / np.abs(1.0 - a1 * z - a2 * z * z) ** 2
+    return psd
+
+
+def _sin2(f, dt):
+    s = np.sin(np.pi * f * dt)
+    return np.maximum(s * s, 1e-300)
+
+
+def internal_psd(name: str, p: dict, dt_i: float) -> Optional[Callable]:
+    """Two-sided PSD per Hz at the internal rate of one noise effect (None: not a noise)."""
+    if name == 'bias_instability':
+        b = p['B']
+        return lambda f: b * b * dt_i / (2.0 * np.sqrt(_sin2(f, dt_i)))
+    if name == 'rate_random_walk':
+        k = p['K']
+        return lambda f: k * k * dt_i * dt_i / (4.0 * _sin2(f, dt_i))
+    if name == 'gauss_markov':
+        return _ar1(p['sigma'], p['tau_s'], dt_i, int(p.get('order', 1.0)))
+    if name == 'resonance':
+        return _resonance(p['sigma'], p['freq_hz'], p['q'], dt_i)
+    return None
+
+
+def fold(f, rate: float):
+    """Frequency ``f`` folded into [0, rate / 2] by sampling at ``rate``."""
+    g = np.mod(f, rate)
+    return np.minimum(g, rate - g)
+
+
+_H2_CACHE: dict = {}
+
+
+@dataclass
+class ModelSpectrum:
+    """Output PSD of a static twin: continuous part, lines, deterministic mean term."""
+
+    dt: float
+    decimation: int
+    taps: int                            # internal moving average: taps, cascaded stages
+    stages: int
+    white_int: float                     # two-sided white PSD at the internal rate
+    internal: List[Callable] = field(default_factory=list)   # two-sided, internal rate
+    output_white: float = 0.0            # two-sided white PSD added at the output
+    angle_var: float = 0.0               # white angle error variance (rad^2), at the output
+    lines: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, mean square)
+    warmups: List[Tuple[float, float]] = field(default_factory=list)  # (amplitude, tau_s)
+    peaks: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, width) to resolve
+
+    def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
+        """``nu`` (cycles per output sample, sorted) with dense points across every peak."""
+        if not self.peaks:
+            return nu
+        extra = [nu]
+        for f0, width in self.peaks:
+            c, w = f0 * self.dt, width * self.dt
+            d = np.linspace(max(c - 12 * w, nu[0]), min(c + 12 * w, nu[-1]), points)
+            extra.append(d)
+        return np.unique(np.concatenate(extra))
+
+    @property
+    def dt_i(self) -> float:
+        return self.dt / self.decimation
+
+    def h2(self, f: np.ndarray) -> np.ndarray:
+        """|H(f)|^2 of the internal filter at internal-rate frequencies ``f``."""
+        key = (self.taps, self.stages, self.dt_i, f.size, float(f[0]), float(f[-1]))
+        hit = _H2_CACHE.get(key)
+        if hit is not None:
+            return hit
+        if len(_H2_CACHE) > 512:
+            _H2_CACHE.clear()
+        _H2_CACHE[key] = out = self._h2(f)
+        return out
+
+    def _h2(self, f: np.ndarray) -> np.ndarray:
+        if self.taps <= 1:
+            return np.ones(np.shape(f))
+        x = np.pi * np.asarray(f) * self.dt_i
+        s = np.sin(x)
+        small = np.abs(s) < 1e-12
+        ratio = np.where(small, 1.0, np.sin(self.taps * x) / (self.taps * np.where(small, 1.0, s)))
+        return ratio ** (2 * self.stages)
+
+    def one_sided(self, f, parts: Optional[Sequence[int]] = None) -> np.ndarray:
+        """
+        One-sided output PSD (unit^2/Hz) at output frequencies ``f`` in (0, fs / 2].
+
+        ``parts``: indices of ``internal`` to include (default all), plus the white parts;
+        ``parts=()`` gives the white parts only.
+        """
+        f = np.asarray(f, dtype=np.float64)
+        fs = 1.0 / self.dt
+        total = np.zeros_like(f)
+        sel = range(len(self.internal)) if parts is None else parts
+        for r in range(self.decimation):
+            fr = f + r * fs
+            s = np.full_like(f, self.white_int)
+            for i in sel:
+                s = s + self.internal[i](fr)
+            total += self.h2(fr) * s
+        s_sin = np.sin(np.pi * f * self.dt)
+        total += self.output_white + self.angle_var * 4.0 * s_sin * s_sin / self.dt
+        return 2.0 * total
+
+    def deterministic(self, n: int) -> np.ndarray:
+        """Return the warm-up terms at the ``n`` output sample instants (zeros without warm-up)."""
+        t = np.arange(n) * self.dt
+        out = np.zeros(n)
+        for amp, tau in self.warmups:
+            out += self.deterministic_at(t, amp, tau)
+        return out
+
+    def deterministic_at(self, t: np.ndarray, amp: float, tau: float) -> np.ndarray:
+        """One warm-up term at output times ``t`` (decimation phase and filter delay included)."""
+        shift = (self.decimation - 1) * self.dt_i - 0.5 * (self.taps - 1) * self.stages * self.dt_i
+        return amp * np.exp(-(np.asarray(t) + shift) / tau)
+
+
+def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> ModelSpectrum:
+    """
+    Return the output spectrum of a static twin: white rate noise N, output step, ``effects``.
+
+    ``n_white`` is the baseline's N at the output (the twin scales the internal white noise by
+    the filter's long-tau gain so that the output keeps N). Raises ValueError for an effect
+    without a closed form (a motion or encoder effect).
+    """
+    decim, taps, stages = 1, 1, 1
+    for name, p in effects:
+        if name == 'internal_lowpass':
+            decim = max(decim, int(p.get('decimation', 1.0)))
+            taps, stages = int(p['taps']), int(p.get('stages', 2.0))
+    h = moving_average_kernel(taps, stages)
+    gain = float(np.sqrt(decim * np.sum([h[r::decim].sum() ** 2 for r in range(decim)])))
+    dt_i = dt / decim
+    spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,
+                         white_int=(n_white / gain) ** 2,
+                         output_white=lsb * lsb / 12.0 * dt)
+    for name, p in effects:
+        if name not in CLOSED_FORM:
+            raise ValueError(f'effect {name} has no closed-form static spectrum')
+        psd = internal_psd(name, p, dt_i)
+        if psd is not None:
+            spec.internal.append(psd)
+            if name == 'resonance':
+                spec.peaks.append((float(fold(p['freq_hz'], 1.0 / dt)),
+                                   p['freq_hz'] / max(p['q'], 0.5)))
+        elif name == 'quantization':
+            spec.angle_var += p['step_rad'] ** 2 / (6.0 if p.get('dither', 0.0) else 12.0)
+        elif name == 'vibration':
+            fa = fold(p['freq_hz'], 1.0 / dt_i)
+            power = 0.5 * p['amplitude'] ** 2 * float(spec.h2(np.array([fa]))[0])
+            spec.lines.append((float(fold(fa, 1.0 / dt)), power))
+        elif name == 'temperature_drift':
+            spec.warmups.append((p['amplitude'], p['tau_s']))
+    return spec

@@ -1,0 +1,139 @@
+"""The static closed forms against the bench simulator's twins and the IEEE formulas."""
+from gyro_char.diagnosis import expected, spread, static, static_expect
+from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis.engine import run
+from gyro_char.diagnosis.spectra import model_spectrum
+from gyro_char.sim import noise_gen
+from gyro_char.sim.config import BenchConfig, noiseless
+from gyro_char.sim.simulator import simulate_static
+import numpy as np
+import pytest
+from scipy import signal
+
+DT = 0.01
+LSB = 0.05 * np.pi / 180.0
+BASE = static.StaticBaseline(N=7e-4, bias=0.0, drift=0.0, lsb=LSB, dt=DT)
+LOWPASS = ('internal_lowpass', {'taps': 7.0, 'stages': 2.0, 'decimation': 8.0})
+CASES = {
+    'baseline': [],
+    'internal_lowpass': [LOWPASS],
+    'bias_instability': [('bias_instability', {'B': 3e-4})],
+    'rate_random_walk': [('rate_random_walk', {'K': 3e-5})],
+    'gauss_markov': [('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.2, 'order': 1.0})],
+    'gauss_markov_2': [('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.05, 'order': 2.0})],
+    'quantization': [('quantization', {'step_rad': 2e-4, 'dither': 1.0})],
+    'vibration': [('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}), LOWPASS],
+    'temperature_drift': [('temperature_drift', {'amplitude': -3e-3, 'tau_s': 20.0})],
+    'resonance': [('resonance', {'sigma': 5e-3, 'freq_hz': 19.9, 'q': 25.0}), LOWPASS],
+}
+
+
+@pytest.mark.parametrize('name', list(CASES))
+def test_expected_observables_equal_the_twins_within_their_scatter(name):
+    n, reps = 2 ** 14, 10
+    lay = obs.static_layout(n, DT)
+    effects = CASES[name]
+    spec = model_spectrum(BASE.N, LSB, DT, effects)
+    mean = expected.expected_blocks(spec, lay)
+    sd = spread.spreads(spec, lay)
+    twins = [obs.static_observables(static.simulate_twin(BASE, n, effects, 40 + k), lay)
+             for k in range(reps)]
+    for block in ('adev', 'psd', 'tone', 'acf', 'drift'):
+        stack = np.array([t[block] for t in twins])
+        tw_mean, tw_sd = stack.mean(axis=0), stack.std(axis=0, ddof=1)
+        # The closed-form mean within 4.5 standard errors of the twins' mean (plus a floor for
+        # blocks the twins hardly scatter in) ...
+        tol = 4.5 * np.maximum(tw_sd, sd[block]) / np.sqrt(reps) + 1e-6
+        assert np.all(np.abs(mean[block] - tw_mean) < tol), (name, block, mean[block], tw_mean)
+        # ... and the closed-form spread that of the twins (chi-square scatter of 10 twins).
+        ratio = np.median(tw_sd / np.maximum(sd[block], 1e-12))
+        assert 0.55 < ratio < 1.6, (name, block, ratio)
+
+
+def test_allan_closed_form_equals_the_generators_exact_avar():
+    n = 2 ** 16
+    g = expected.grids(n, DT)
+    for eff, terms in [([], {'N': 7e-4}),
+                       ([('bias_instability', {'B': 5e-5})], {'B': 5e-5}),
+                       ([('rate_random_walk', {'K': 2e-5})], {'K': 2e-5}),
+                       ([('quantization', {'step_rad': 1e-5 * np.sqrt(12.0)})],
+                        {'Q': 1e-5})]:
+        spec = model_spectrum(terms.get('N', 0.0), 0.0, DT, eff)
+        want = noise_gen.expected_avar(g.m[:10], DT, **terms)
+        np.testing.assert_allclose(expected.avar(spec, g)[:10], want, rtol=3e-3)
+
+
+def test_resonance_effect_is_band_limited_noise_of_the_given_variance_and_width():
+    cfg = noiseless(BenchConfig.from_preset('adis16405'), keep_errors=False)
+    cfg.gyro.static_rate_hz = 200.0
+    sigma, f0, q = 0.01, 20.0, 10.0
+    run_ = simulate_static(cfg, duration=600.0, seed=3, channels=['gyro_z'],
+                           effects=[f'resonance:sigma={sigma},freq_hz={f0},q={q}'])
+    x = run_.imu.channels['gyro_z']
+    assert x.std() == pytest.approx(sigma, rel=0.05)
+    f, p = signal.welch(x, fs=200.0, nperseg=4096)
+    peak = f[np.argmax(p)]
+    assert peak == pytest.approx(f0, abs=0.3)
+    half = f[p > 0.5 * p.max()]
+    assert half.max() - half.min() == pytest.approx(f0 / q, rel=0.25)
+    spec = model_spectrum(0.0, 0.0, 1 / 200.0, [('resonance', {'sigma': sigma, 'freq_hz': f0,
+                                                               'q': q})])
+    for lo in np.arange(10.0, 30.0, 1.0):      # 1 Hz bands: ~20 bins of ~60 segments each
+        band = (f >= lo) & (f < lo + 1.0)
+        assert p[band].mean() == pytest.approx(spec.one_sided(f[band]).mean(), rel=0.12), lo
+
+
+def test_closed_form_diagnosis_names_smoothing_and_warm_up_on_a_simulated_record():
+    rng_seed = 5
+    n = 2 ** 16
+    truth = [LOWPASS, ('temperature_drift', {'amplitude': 4e-3, 'tau_s': 40.0})]
+    x = static.simulate_twin(BASE, n, truth, rng_seed)
+    problem = static_expect.closed_form_problem([x], DT, twins=6, seed=2)
+    d = run(problem, repeats=6, seed=2)
+    assert d.selected_effects[:2] == ['internal_lowpass', 'temperature_drift']
+    params = dict(d.model)
+    assert params['internal_lowpass']['taps'] == 7 and params['internal_lowpass']['stages'] == 2
+    assert params['temperature_drift']['tau_s'] == pytest.approx(40.0, rel=0.3)
+    assert d.final_gap < d.null_gap['final_model_q95'] + 0.3 < d.baseline_gap
+    # The twins' residuals about the closed form have unit spread (the closed forms hold).
+    for block, c in problem.check['records'][0].items():
+        assert 0.5 < c['rms_residual'] < 1.6, (block, c)
+
+
+def test_two_records_and_a_holdout_at_full_length_through_the_command(tmp_path):
+    import json
+    from gyro_char.cli import main
+    paths = []
+    for k, n in enumerate((6000, 9000, 7000)):
+        rng = np.random.default_rng(60 + k)
+        t = np.arange(n) * DT
+        x = 0.4 * rng.standard_normal(n) + 0.2 * np.sin(2 * np.pi * 23.0 * t + k)
+        path = tmp_path / f'rec{k}.csv'
+        with open(path, 'w') as fh:
+            fh.write('t_s,gyro_x_dps\n')
+            fh.writelines(f'{a:.2f},{b:.2f}\n' for a, b in zip(t, np.round(x / 0.05) * 0.05))
+        paths.append(str(path))
+    out = tmp_path / 'out'
+    assert main(['diagnose', '--kind', 'static', paths[0], paths[1], '--holdout', paths[2],
+                 '--repeats', '4', '--check', '3', '--out', str(out), '--quiet']) == 0
+    d = json.loads((out / 'diagnosis.json').read_text())
+    assert [r['samples'] for r in d['analysed']['records']] == [6000, 9000]
+    assert d['analysed']['samples'] == 6000 and d['analysed']['duration_s'] == pytest.approx(60.0)
+    assert d['selected_effects'][:1] == ['vibration']
+    assert d['holdout']['analysed']['samples'] == 7000
+    assert d['holdout']['final_gap'] < 0.5 * d['holdout']['baseline_gap']
+    assert d['posterior_predictive']['repeats'] == 3
+
+
+def test_smoothing_filter_avar_equals_the_noise_fits_exact_autocovariance_form():
+    # An independent exact reference: the Allan variance of white noise through the FIR and
+    # decimation from its finite autocovariance (gyro_char.allan.expected).
+    from gyro_char.allan.expected import moving_average_kernel, white_avar_unit
+    n, big_n = 2 ** 16, 7e-4
+    g = expected.grids(n, DT)
+    for taps, stages, dec in ((7, 2, 8), (4, 3, 8), (5, 1, 2)):
+        spec = model_spectrum(big_n, 0.0, DT, [('internal_lowpass', {
+            'taps': float(taps), 'stages': float(stages), 'decimation': float(dec)})])
+        want = white_avar_unit(moving_average_kernel(taps, stages), dec, g.m) * big_n ** 2 \
+            / (g.m * DT)
+        np.testing.assert_allclose(expected.avar(spec, g), want, rtol=2e-3)
