@@ -131,8 +131,7 @@ def test_manifest_of_mixed_kinds_equals_the_single_commands(cluster, tmp_path):
     Run allan, swing and diagnose devices in one batch, as their single commands would.
 
     The cluster is named by its scheduler file; the swing period comes from the manifest; the
-    diagnose device only shows that its options reach the job (a diagnosis takes too long for a
-    unit test).
+    diagnose options (a short, one-channel diagnosis) reach the job.
     """
     data = tmp_path / 'data'
     data.mkdir()
@@ -144,14 +143,17 @@ def test_manifest_of_mixed_kinds_equals_the_single_commands(cluster, tmp_path):
                                         'stand1,data/stand1,swing,5.0,\n'
                                         'twin1,data/static1.csv,diagnose,,\n')
     out = tmp_path / 'out'
+    diag = ['--channels', 'gyro_x', '--repeats', '4', '--check', '0', '--max-samples', '4096']
     rc = main(['fleet', str(tmp_path / 'fleet.csv'), '--scheduler',
                str(cluster['scheduler_file']), '--out', str(out),
-               '--diagnose-options=--repeats 3', '--quiet'])
-    assert rc == 3
+               '--diagnose-options=' + ' '.join(diag), '--quiet'])
+    assert rc == 0
     singles = {'static1': (['allan', str(data / 'static1.csv')],
                            ('noise.json', 'allan.json', 'imu.yaml', 'allan.png')),
                'stand1': (['swing', str(data / 'stand1'), '--period', '5'],
-                          ('swing.json', 'swing.png'))}
+                          ('swing.json', 'swing.png')),
+               'twin1': (['diagnose', '--kind', 'static', str(data / 'static1.csv')] + diag,
+                         ('diagnosis.json', 'diagnosis_gyro_x.png'))}
     for device, (argv, files) in singles.items():
         assert main(argv + ['--out', str(tmp_path / device), '--quiet']) == 0
         for f in files:
@@ -165,7 +167,9 @@ def test_manifest_of_mixed_kinds_equals_the_single_commands(cluster, tmp_path):
     for q in ('scale_factor_error', 'bias', 'bias_drift'):
         v, s = swing[q]['value'], swing[q]['sigma']
         assert float(got[q]['value']) == v and float(got[q]['lo68']) == v - s
-    twin = [r for r in rows if r['device'] == 'twin1']
-    assert len(twin) == 1 and twin[0]['status'] == 'error' and twin[0]['kind'] == 'diagnose'
-    assert twin[0]['message'] == '--repeats must be >= 4 (the gap is judged against their ' \
-                                 'scatter)'
+    diagnosis = json.loads((tmp_path / 'twin1' / 'diagnosis.json').read_text())
+    got = {r['quantity']: r for r in rows if r['device'] == 'twin1'}
+    assert got['final_gap']['kind'] == 'diagnose' and got['final_gap']['channel'] == 'gyro_x'
+    for q in ('baseline_gap', 'final_gap'):
+        assert float(got[q]['value']) == diagnosis[q]
+    assert float(got['null_gap_q95']['value']) == diagnosis['null_gap']['q95']
