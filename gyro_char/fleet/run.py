@@ -15,7 +15,7 @@ import sys
 from typing import Dict, List, Optional, Sequence
 
 from gyro_char.errors import InputError
-from gyro_char.fleet.engine import connect, run_tasks
+from gyro_char.fleet.engine import run_tasks
 from gyro_char.fleet.inputs import Device, discover
 from gyro_char.fleet.spec import judge, limit_for, load_spec
 from gyro_char.fleet.store import cache_key, Store
@@ -24,6 +24,7 @@ from gyro_char.fleet.table import (COLUMNS, device_rows, device_summaries, OUTLI
 from gyro_char.fleet.task import package_version, run_device
 from gyro_char.jobs import job_module, KINDS
 from gyro_char.jobs.base import is_upper_bound
+from gyro_char.jobs.dask_client import connect
 from gyro_char.progress import progress
 
 EXIT_SOME_ERRORS = 3

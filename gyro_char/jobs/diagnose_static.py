@@ -15,6 +15,7 @@ import os
 from typing import Callable, List, Optional, Sequence
 
 from gyro_char.errors import InputError
+from gyro_char.jobs.dask_client import connect
 import numpy as np
 
 STATIC_STEPS = 4      # greedy steps at most, static records on closed forms
@@ -137,18 +138,12 @@ def map_tasks(fn: Callable[[dict], dict], tasks: List[dict],
     if not scheduler:
         return [fn(t) for t in tasks]
     try:
-        from distributed import Client
+        import distributed  # noqa: F401
     except ImportError:
         raise InputError('--scheduler needs the dask distributed package '
                          '(pip install distributed)') from None
-    try:
-        client = Client(scheduler, timeout='5s')
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InputError(f'cannot reach the Dask scheduler {scheduler!r}: {exc}') from None
-    try:
+    with connect(None, scheduler) as client:
         return client.gather(client.map(fn, tasks, pure=False))
-    finally:
-        client.close()
 
 
 def run_static(args, recs, dts, hold, channels, emit: Callable[[str], None]) -> dict:
