@@ -47,6 +47,29 @@ def add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
     parser.add_argument('--quiet', action='store_true', help='no progress bars')
 
 
+def add_job_command(subparsers, name: str, *, doc: str, job, many: bool, help_text: str,
+                    input_help: str) -> None:
+    """
+    Register a subcommand that runs one ``gyro_char.jobs`` module on its INPUT(s).
+
+    The job owns its options (``job.add_options``) and its work (``job.run``), so the command
+    and ``gyro-char fleet`` run the same code.
+    """
+    p = subparsers.add_parser(name, help=help_text, description=doc.strip().splitlines()[0])
+    if many:
+        p.add_argument('inputs', metavar='INPUT', nargs='+', help=input_help)
+    else:
+        p.add_argument('input', metavar='INPUT', help=input_help)
+    job.add_options(p)
+    add_common(p, default_out=f'{name}_out')
+
+    def run(args) -> int:
+        job.run(args)
+        return 0
+
+    p.set_defaults(func=run)
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     args = build_parser().parse_args(argv)
     try:

@@ -195,6 +195,19 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     return [spaces[k] for k in names]
 
 
+def checked_records(records: Sequence, dt: float, max_samples: Optional[int] = None):
+    """Return the records as float64 cut to ``max_samples``, and their observable layouts."""
+    recs = [np.asarray(r, dtype=np.float64)[:max_samples] for r in records]
+    for r in recs:
+        if not np.all(np.isfinite(r)):
+            raise InputError('static record contains non-finite samples')
+    try:
+        layouts = [obs.static_layout(r.size, dt) for r in recs]
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    return recs, layouts
+
+
 def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = 'gyro_x',
                    max_samples: Optional[int] = None,
                    names: Sequence[str] = STATIC_EFFECTS,
@@ -207,14 +220,7 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
     ``max_samples`` (twins are simulated at the same length, so real and simulated observables
     are computed identically).
     """
-    recs = [np.asarray(r, dtype=np.float64)[:max_samples] for r in records]
-    for r in recs:
-        if not np.all(np.isfinite(r)):
-            raise InputError('static record contains non-finite samples')
-    try:
-        layouts = [obs.static_layout(r.size, dt) for r in recs]
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
+    recs, layouts = checked_records(records, dt, max_samples)
     if base is None:
         base = calibrate_n(fit_baseline(recs[0], dt), recs[0], channel)
     reals = [obs.static_observables(r, lay) for r, lay in zip(recs, layouts)]

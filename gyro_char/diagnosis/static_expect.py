@@ -17,7 +17,6 @@ from gyro_char.diagnosis import static as ds
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.spectra import model_spectrum
-from gyro_char.errors import InputError
 import numpy as np
 
 
@@ -110,14 +109,7 @@ def white_band_spread(n: int, dt: float) -> float:
 def closed_form_problem(records, dt, *, channel='gyro_x', max_samples=None,
                         names=ds.STATIC_EFFECTS, base=None, twins=8, seed=1):
     """Build the static ``Problem`` with closed-form ``expect`` (see the module docstring)."""
-    recs = [np.asarray(r, dtype=np.float64)[:max_samples] for r in records]
-    for r in recs:
-        if not np.all(np.isfinite(r)):
-            raise InputError('static record contains non-finite samples')
-    try:
-        layouts = [obs.static_layout(r.size, dt) for r in recs]
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
+    recs, layouts = ds.checked_records(records, dt, max_samples)
     if base is None:
         base = calibrate_n(ds.fit_baseline(recs[0], dt), recs[0])
     problem = ds.static_problem(recs, dt, channel=channel, names=names, base=base)

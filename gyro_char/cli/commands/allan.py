@@ -7,20 +7,12 @@ interval per channel), ``noise.json`` (N, B, K, Q, R per channel, SI, with 68 % 
 ``allan.png``. Prints the human table (deg/sqrt(h), deg/h, ...) and every note about the input.
 The work is ``gyro_char.jobs.allan_job``, which ``gyro-char fleet`` runs too.
 """
-from gyro_char.cli import add_common
+from gyro_char.cli import add_job_command
 from gyro_char.jobs import allan_job
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser(
-        'allan', help='Allan variance + IEEE 952 noise terms (N, B, K, Q, R) of a static record',
-        description=__doc__.strip().splitlines()[0])
-    p.add_argument('input', metavar='INPUT', help='bag directory, .mcap, ROS 1 .bag or CSV')
-    allan_job.add_options(p)
-    add_common(p, default_out='allan_out')
-    p.set_defaults(func=run)
-
-
-def run(args) -> int:
-    allan_job.run(args)
-    return 0
+    add_job_command(
+        subparsers, 'allan', doc=__doc__, job=allan_job, many=False,
+        help_text='Allan variance + IEEE 952 noise terms (N, B, K, Q, R) of a static record',
+        input_help='bag directory, .mcap, ROS 1 .bag or CSV')

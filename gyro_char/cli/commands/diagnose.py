@@ -8,21 +8,12 @@ greedily; writes ``diagnosis.json`` (docs/design.md) and ``diagnosis_<channel>.p
 ``--out``. The work, options and outputs are described in ``gyro_char.jobs.diagnose_job`` and
 ``gyro_char.jobs.diagnose_static``; ``gyro-char fleet`` runs them too.
 """
-from gyro_char.cli import add_common
+from gyro_char.cli import add_job_command
 from gyro_char.jobs import diagnose_job
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser(
-        'diagnose', help='sim-to-real gap: where it lies, which unmodelled effects explain it',
-        description=__doc__.strip().splitlines()[0])
-    p.add_argument('inputs', metavar='INPUT', nargs='+',
-                   help='bag directory, .mcap, ROS 1 .bag or CSV (same sensor, same rate)')
-    diagnose_job.add_options(p)
-    add_common(p, default_out='diagnose_out')
-    p.set_defaults(func=run)
-
-
-def run(args) -> int:
-    diagnose_job.run(args)
-    return 0
+    add_job_command(
+        subparsers, 'diagnose', doc=__doc__, job=diagnose_job, many=True,
+        help_text='sim-to-real gap: where it lies, which unmodelled effects explain it',
+        input_help='bag directory, .mcap, ROS 1 .bag or CSV (same sensor, same rate)')
