@@ -8,7 +8,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ('gyro_char', 'msg_adapters')
 # Layer of each top-level part: a module may import its own part or a lower layer only.
 LAYER = {
-    'gyro_char': 0, 'errors': 0, 'records': 1, 'units': 1, 'progress': 1, 'msg_adapters': 1,
+    'gyro_char': 0, 'errors': 0, 'records': 1, 'units': 1, 'progress': 1, 'robust': 1,
+    'msg_adapters': 1,
     'io': 2, 'allan': 3, 'swing': 3, 'sim': 4, 'live': 4, 'diagnosis': 5,
     'report': 6, 'jobs': 7, 'fleet': 8, 'cli': 9, 'nodes': 9,
 }

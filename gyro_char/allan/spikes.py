@@ -18,10 +18,10 @@ its two neighbours.
 """
 from dataclasses import dataclass
 
+from gyro_char.robust import robust_sd
 import numpy as np
 
 THRESHOLD = 8.0
-MAD_SD = 1.4826
 
 
 @dataclass
@@ -51,7 +51,7 @@ def detect(y, dt: float, threshold: float = THRESHOLD) -> SpikeReport:
     if y.size >= 3:
         e[1:-1] = y[1:-1] - 0.5 * (y[:-2] + y[2:])
     inner = e[1:-1]
-    scale = MAD_SD * float(np.median(np.abs(inner - np.median(inner)))) if inner.size else 0.0
+    scale = float(robust_sd(inner)) if inner.size else 0.0
     if not scale > 0:  # coarsely quantized records: most e are 0; the sd is the scale left
         scale = float(np.std(inner)) if inner.size else 0.0
     if not scale > 0:

@@ -8,10 +8,11 @@ the robust z of every value against the fleet, which the report uses to put outl
 """
 import csv
 import math
-import os
 from typing import Dict, List, Optional, Sequence
 
 from gyro_char.jobs.base import is_upper_bound
+from gyro_char.report.atomic import atomic_write
+from gyro_char.robust import robust_sd
 import numpy as np
 
 COLUMNS = ('device', 'path', 'kind', 'status', 'message', 'channel', 'quantity', 'value',
@@ -48,12 +49,6 @@ def _cell(v) -> str:
     return str(v)
 
 
-def _atomic_write(path: str, write) -> None:
-    tmp = f'{path}.tmp-{os.getpid()}'
-    write(tmp)
-    os.replace(tmp, path)
-
-
 def write_csv(path: str, rows: List[dict], columns: Sequence[str]) -> None:
     """CSV with floats written by ``repr`` (read back bit for bit), NaN / None as empty."""
     def write(tmp):
@@ -62,7 +57,7 @@ def write_csv(path: str, rows: List[dict], columns: Sequence[str]) -> None:
             w.writerow(columns)
             for r in rows:
                 w.writerow([_cell(r.get(c)) for c in columns])
-    _atomic_write(path, write)
+    atomic_write(path, write)
 
 
 def write_parquet(path: str, rows: List[dict], columns: Sequence[str]) -> None:
@@ -82,7 +77,7 @@ def write_parquet(path: str, rows: List[dict], columns: Sequence[str]) -> None:
         else:
             arrays[c] = pa.array(['' if v is None else str(v) for v in values],
                                  type=pa.string())
-    _atomic_write(path, lambda tmp: pq.write_table(pa.table(arrays), tmp))
+    atomic_write(path, lambda tmp: pq.write_table(pa.table(arrays), tmp))
 
 
 def robust_z(rows: List[dict]) -> List[Optional[float]]:
@@ -106,7 +101,7 @@ def robust_z(rows: List[dict]) -> List[Optional[float]]:
         if np.all(x > 0):
             x = np.log10(x)
         med = float(np.median(x))
-        mad = 1.4826 * float(np.median(np.abs(x - med)))
+        mad = float(robust_sd(x))
         if not mad > 0:
             continue
         for i, v in zip(idx, x):

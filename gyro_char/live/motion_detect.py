@@ -17,9 +17,8 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Dict, List, Optional
 
+from gyro_char.robust import robust_sd
 import numpy as np
-
-MAD_TO_SIGMA = 1.4826
 
 
 @dataclass
@@ -134,9 +133,8 @@ class MotionDetector:
         means = np.asarray(self._warm_means)
         self.ref_var = np.median(np.asarray(self._warm_vars), axis=0)
         steps = np.diff(means, axis=0)
-        mad = np.median(np.abs(steps - np.median(steps, axis=0)), axis=0)
         # Consecutive means differ by sqrt(2) times the scatter of one mean.
-        self.mean_scatter = MAD_TO_SIGMA * mad / np.sqrt(2.0)
+        self.mean_scatter = robust_sd(steps, axis=0) / np.sqrt(2.0)
         floor = np.sqrt(self.ref_var / self.block_len)
         # Quantized sensors can give a zero MAD; never go below the white-noise scatter / 4.
         self.mean_scatter = np.maximum(self.mean_scatter, 0.25 * floor)

@@ -10,10 +10,10 @@ import base64
 import html
 import io
 import math
-import os
 from typing import Callable, Dict, List, Optional, Tuple
 from urllib.parse import quote
 
+from gyro_char.report.atomic import atomic_write
 from gyro_char.units import HUMAN_UNITS, SI_UNITS, to_si
 import matplotlib
 matplotlib.use('Agg')
@@ -145,7 +145,9 @@ def write_report(path: str, devices: List[Dict], rows: List[Dict], limit_of: Lim
                    f'src="data:image/png;base64,{p["png"]}"><figcaption>'
                    f'{html.escape(p["title"])} [{html.escape(p["unit"])}]</figcaption></figure>')
     out.append('</div></body></html>')
-    tmp = f'{path}.tmp-{os.getpid()}'
-    with open(tmp, 'w') as fh:
-        fh.write('\n'.join(out))
-    os.replace(tmp, path)
+
+    def write(tmp):
+        with open(tmp, 'w') as fh:
+            fh.write('\n'.join(out))
+
+    atomic_write(path, write)
