@@ -24,7 +24,9 @@ generator:
 
 A second set of shapes, ``validate_diagnosis_heldout.py``, was fixed before the closed-form
 diagnosis was tuned and is run only with ``--held-out`` (once, at the end of a development
-round): it says how far the results carry to shapes nobody looked at.
+round): it says how far the results carry to shapes nobody looked at. A third set,
+``validate_diagnosis_heldout_b.py`` (``--held-out b``), was written in session 4 before any
+diagnosis ran on it.
 
 Levels per shape: 0 and 1 (the earlier weak and strong magnitudes) and 2, the edge of
 detectability on a 2 h record (chosen by the magnitude's own detectability scale: a few sigma
@@ -36,11 +38,13 @@ generated here too, without the bench simulator. Usage::
     python bench/validate_diagnosis.py --duration 7200 --levels 2 1 --seeds 11
                                                   # 2 h records, edge and strong levels
     python bench/validate_diagnosis.py --duration 7200 --levels 2 1 --seeds 11 --held-out
+    python bench/validate_diagnosis.py --duration 7200 --levels 2 1 --seeds 11 --held-out b
     python bench/validate_diagnosis.py --samples 8192 --method twins   # the earlier table
     python bench/validate_diagnosis.py --quick    # three cases, as in test/test_diag_validation
     python bench/validate_diagnosis.py --swing    # the swing part (validate_diagnosis_swing.py)
 """
 import argparse
+import importlib
 import os
 import sys
 import time
@@ -189,8 +193,9 @@ def main(argv=None) -> int:
     ap.add_argument('--levels', type=int, nargs='+', default=[0, 1],
                     help='magnitude levels (0 weak, 1 strong, 2 edge of detectability)')
     ap.add_argument('--method', choices=('closed-form', 'twins'), default='closed-form')
-    ap.add_argument('--held-out', action='store_true',
-                    help='the held-out shapes (validate_diagnosis_heldout.py), no pairs')
+    ap.add_argument('--held-out', nargs='?', const='a', choices=('a', 'b'), default=None,
+                    help='a held-out shape set, no pairs: a = validate_diagnosis_heldout.py '
+                         '(used once in session 3), b = validate_diagnosis_heldout_b.py')
     ap.add_argument('--only', nargs='+', default=None, metavar='NAME',
                     help='only these shapes (and no pairs, no clean records)')
     ap.add_argument('--repeats', type=int, default=6)
@@ -208,8 +213,8 @@ def main(argv=None) -> int:
     shapes = SHAPES
     if args.held_out:
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-        import validate_diagnosis_heldout
-        shapes = validate_diagnosis_heldout.shapes(DT, SIG, N_ARW)
+        module = 'validate_diagnosis_heldout' + ('_b' if args.held_out == 'b' else '')
+        shapes = importlib.import_module(module).shapes(DT, SIG, N_ARW)
     todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out)
     if args.only:
         todo = [c for c in todo if len(c[1]) == 1 and c[1][0][0] in args.only]

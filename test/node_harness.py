@@ -28,10 +28,10 @@ def _domain_ids() -> List[int]:
     Return the ROS_DOMAIN_IDs the node tests may use, one per test file and mode.
 
     ``GYRO_CHAR_TEST_DOMAINS`` (e.g. ``63,163-169``) gives them when several sessions run node
-    tests on one machine at once; the default is 80-91. Fewer ids than needed are reused in turn.
+    tests on one machine at once; the default is 80-93. Fewer ids than needed are reused in turn.
     """
     ids: List[int] = []
-    for part in os.environ.get('GYRO_CHAR_TEST_DOMAINS', '80-91').split(','):
+    for part in os.environ.get('GYRO_CHAR_TEST_DOMAINS', '80-93').split(','):
         low, _, high = part.strip().partition('-')
         ids += list(range(int(low), int(high or low) + 1))
     return ids
@@ -39,7 +39,8 @@ def _domain_ids() -> List[int]:
 
 _IDS = _domain_ids()
 _KEYS = [('swing', 2), ('allan', 2), ('bench_sim', 2), ('dds_smoke', 1), ('colcon', 1),
-         ('shutdown', 1), ('instances', 1), ('params', 1)]
+         ('shutdown', 1), ('instances', 1), ('params', 1), ('allan_filter', 1),
+         ('demo', 1)]
 DOMAINS: Dict[str, object] = {}
 _next = 0
 for _key, _n in _KEYS:

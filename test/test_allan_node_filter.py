@@ -6,11 +6,11 @@ from gyro_char.allan.sensor_filter import SensorFilter
 from gyro_char.nodes.allan_node import AllanNode
 from gyro_char.records import Recording
 from gyro_char.sim.noise_gen import generate
-from node_harness import node_command, ros_context, ros_env
+from node_harness import DOMAINS, node_command, ros_context, ros_env
 import numpy as np
 from rclpy.parameter import Parameter
 
-DOMAIN = 64  # this file's own domain (issue 16)
+DOMAIN = DOMAINS['allan_filter']
 
 
 def test_sensor_filter_parameter_is_validated_and_reaches_the_fit():

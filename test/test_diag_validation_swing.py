@@ -9,13 +9,16 @@ def _harness():
     return bench_script.load('validate_diagnosis_swing')
 
 
-@pytest.mark.parametrize('samples', [0.23, 0.61])
-def test_lagrange_delay_is_the_stated_fraction_of_a_sample(samples):
+SHORT = {'duration': 60.0, 'rate_hz': 200.0}
+
+
+@pytest.mark.parametrize('samples', [0.23, 0.61, 2.4])
+def test_lagrange_delay_is_the_stated_delay(samples):
     h = _harness()
-    dt, f = 1.0 / h.RATE_HZ, 1.0 / h.PERIOD
-    t = np.arange(int(60.0 * h.RATE_HZ)) * dt
+    dt, f = 1.0 / 200.0, 1.0 / h.PERIOD
+    t = np.arange(int(60.0 / dt)) * dt
     x = np.cos(2 * np.pi * f * t)
-    _, y = h.lagrange_delay(t, x, None, None, None, samples)
+    _, y, _, _ = h.lagrange_delay(t, x, None, None, None, None, samples * dt)
     m = slice(10, None)
     a = np.linalg.lstsq(np.c_[np.cos(2 * np.pi * f * t[m]), np.sin(2 * np.pi * f * t[m])],
                         y[m], rcond=None)[0]
@@ -25,8 +28,8 @@ def test_lagrange_delay_is_the_stated_fraction_of_a_sample(samples):
 
 def test_encoder_shapes_differ_from_the_catalogue():
     h = _harness()
-    imu0, enc0 = h.make_record([], 11)
-    _, enc = h.make_record([('encoder_cyclic_error', 0)], 11)
+    imu0, enc0 = h.make_record([], 11, **SHORT)
+    _, enc = h.make_record([('encoder_cyclic_error', 0)], 11, **SHORT)
     err = enc.channels['encoder'] - enc0.channels['encoder']
     phi = enc0.channels['encoder']
     # 1st + 3rd harmonic on 1000 lines (the catalogue: 1st + 2nd on 2048).
@@ -34,7 +37,7 @@ def test_encoder_shapes_differ_from_the_catalogue():
     c = np.linalg.lstsq(cols, err, rcond=None)[0]
     assert np.hypot(c[0], c[1]) == pytest.approx(5e-5, rel=1e-6)
     assert np.hypot(c[2], c[3]) == pytest.approx(2e-5, rel=1e-6)
-    imu1, enc1 = h.make_record([('timestamp_jitter', 1)], 11)
+    imu1, enc1 = h.make_record([('timestamp_jitter', 1)], 11, **SHORT)
     d = enc1.t - enc0.t
     assert np.array_equal(imu1.t, imu0.t)
     assert np.abs(d).max() <= 3e-4 and np.std(d) == pytest.approx(3e-4 / np.sqrt(3), rel=0.05)
@@ -58,3 +61,27 @@ def test_report_counts_top1_ambiguity_and_false_alarms(capsys):
     assert 'top-1 (first selected == truth) among detected 2/3 = 67 %' in out
     assert 'flagged ambiguous with the truth: 1' in out
     assert 'false alarms on clean records: 1/2' in out
+
+
+def test_every_shape_has_one_signature_and_three_levels_the_edge_weakest():
+    h = _harness()
+    imu0, enc0 = h.make_record([], 11, **SHORT)
+    cfg = h.BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': 200.0}})
+    for name, (fn, levels) in h.shapes(200.0).items():
+        assert len(levels) == 3, name
+        outs = []
+        for p in levels:
+            out = fn(imu0.t, imu0.channels['gyro_x'], enc0.t, enc0.channels['encoder'],
+                     h.stand_of(cfg), np.random.default_rng(1), **p)
+            assert len(out) == 4 and out[0].size == out[1].size and out[2].size == out[3].size
+            base = (imu0.channels['gyro_x'], enc0.t, enc0.channels['encoder'])
+            outs.append(max(float(np.std(o - b)) for o, b in zip(out[1:], base)))
+        # weak < strong, and the edge (15 min at 1 kHz) below the weak level (60 s).
+        assert outs[2] < outs[0] < outs[1], (name, outs)
+
+
+def test_held_out_without_its_file_says_so(monkeypatch):
+    h = _harness()
+    monkeypatch.setattr(h, 'HELD_OUT', 'no_such_heldout_file')
+    with pytest.raises(SystemExit, match='no no_such_heldout_file.py'):
+        h.main(['--held-out', '--quick'])

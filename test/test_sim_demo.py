@@ -6,12 +6,17 @@ import math
 from gyro_char.cli import main
 import pytest
 
+try:
+    from node_harness import DOMAINS
+except ImportError:  # no rclpy: the demo runs offline only
+    DOMAINS = {'demo': 56}
+
 
 def test_demo_tables_offline_and_live(tmp_path, capsys, monkeypatch):
     # One run of the whole demo (short records): offline commands on the bags, and the live
     # nodes over DDS on loopback (own domain id), to keep the suite fast.
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', '56')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(DOMAINS['demo']))
     live = importlib.util.find_spec('rclpy') is not None
     out = tmp_path / 'demo'
     argv = ['demo', '--swing-duration', '20', '--static-duration', '90', '--seed', '3',

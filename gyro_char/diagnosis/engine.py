@@ -18,6 +18,8 @@ twins of those records under a list of effects, and the candidate effects' searc
    (or within the spread of the candidates' own gaps, for effects that add variance), naming
    the run that would separate them instead of pretending to know; with three or more such
    candidates that are not all known look-alikes, none is selected and the search stops;
+   when the problem has a ``choose`` criterion (``choice.Criterion``), the candidates that
+   close the gap comparably are ranked by it instead of by the gap (``choose_among``);
 6. refits the selected effects jointly (coordinate passes, each with the others fixed) and
    reports the final gap after that (``refined``).
 """
@@ -25,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence
 
 from gyro_char.diagnosis import gap as diag_gap
+from gyro_char.diagnosis.choice import INDISTINGUISHABLE, refit_score
 from gyro_char.diagnosis.closed_form import ExpectedObjective
 from gyro_char.diagnosis.fit import EffectSpace, Evaluation, fit_effect, GapObjective
 from gyro_char.diagnosis.greedy import (
@@ -56,6 +59,12 @@ class Problem:
     expect: Optional[Callable[[int, list], object]] = None
     # What the simulated twins said about the closed forms (``static_expect``), if used.
     check: dict = field(default_factory=dict)
+    # How to choose among the candidates the gap found significant, ``choose(ev) -> score``
+    # (lower is better; ``choice.Criterion``), when the kind has one; else the smallest gap.
+    choose: Optional[Callable[[Evaluation], float]] = None
+    # The simulator's own twins, ``twin(i, effects, seed)``, when ``simulate`` approximates
+    # them (the swing kind's pseudo-twins): the check of the selected model.
+    twin: Optional[Callable[[int, list, int], Obs]] = None
 
 
 def objective_for(problem: Problem, seeds: Sequence[int]):
@@ -111,6 +120,9 @@ class Diagnosis:
         }
 
 
+# With a choice criterion, a candidate is compared with the best one by the gap when it
+# removes at least this share of what the best removes.
+COMPARABLE = 0.5
 EXCESS_METRIC = 'sqrt(gap^2 - mean null gap^2), 0 when below'
 
 
@@ -195,31 +207,49 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         judged = {n: gap_in(objective, f[2], scatters) for n, f in fits.items()}
         order = sorted(fits, key=lambda n: judged[n])
         best = order[0]
-        params, best_nuisance, ev = fits[best]
         if gap_now - judged[best] <= shrink_needed:
             break
-
         rivals = [n for n in order[1:]
                   if gap_now - judged[n] > shrink_needed
                   and (judged[n] - judged[best] <= shrink_needed
                        or judged[n] - judged[best] <= could_trail(
-                           objective, fits[n][2], ev, scatters))]
+                           objective, fits[n][2], fits[best][2], scatters))]
+        scores = {}
+        if problem.choose is not None:
+            # Candidates that close the gap comparably (the rivals, and any that remove at
+            # least half of what the best removes) are told apart by the kind's own
+            # criterion (``choose_among``), not by how well their mean curves follow this
+            # one realization.
+            close = [n for n in order[1:] if n in rivals
+                     or gap_now - judged[n] >= COMPARABLE * (gap_now - judged[best])]
+            if close:
+                best, others, scores = choose_among(objective, problem, selected, fits,
+                                                    [best] + close)
+                rivals = [n for n in others if n in rivals
+                          or scores[n] - scores[best] <= INDISTINGUISHABLE]
+        params, best_nuisance, ev = fits[best]
         if rivals:
             # Look-alikes (known pairs, see SEPARATING_RUNS): keep the best, say which run
             # would separate them. Unrelated effects shrinking the gap equally: none of them
             # is evidenced (they are fitting what is left of the noise), so stop without
             # selecting.
-            chosen = len(rivals) == 1 or look_alikes([best] + rivals)
-            ambiguous.append({'step': step + 1, 'effects': [best] + rivals,
-                              'gap_after': [fits[n][2].gap for n in [best] + rivals],
+            named = [best] + rivals
+            decided = bool(scores) and all(
+                scores[n] - scores[best] > INDISTINGUISHABLE for n in rivals)
+            chosen = len(rivals) == 1 or look_alikes(named)
+            ambiguous.append({'step': step + 1, 'effects': named,
+                              'gap_after': [fits[n][2].gap for n in named],
                               'selected': chosen,
+                              **({'criterion': [scores[n] for n in named],
+                                  'decided_by_criterion': decided} if scores else {}),
                               'separating_run': '; '.join(separating_run(best, r)
                                                           for r in rivals)})
             if not chosen:
                 break
         selected.append((best, params))
         nuisance = best_nuisance
-        steps.append({'effect': best, 'params': _jsonable(params), 'gap_after': ev.gap})
+        steps.append({'effect': best, 'params': _jsonable(params), 'gap_after': ev.gap,
+                      **({'criterion': scores} if scores else {})})
         current = ev
     greedy_gap = current.gap
     if selected:
@@ -242,6 +272,23 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                  'params': {n: _jsonable(p) for n, p in selected}},
         evaluations=evaluations,
         reals=problem.reals, model=model)
+
+
+def choose_among(objective, problem: Problem, selected: list, fits: dict,
+                 significant: Sequence[str]):
+    """
+    Best of the ``significant`` candidates by ``problem.choose``, each refitted to it.
+
+    Returns the best and the others, best first, and the scores.
+    """
+    spaces = {s.name: s for s in problem.spaces}
+    scores = {}
+    for n in significant:
+        params, nuis, _ = fits[n]
+        scores[n] = refit_score(objective, problem.choose, list(selected), spaces[n], params,
+                                nuis, problem.nuisance)
+    ranked = sorted(significant, key=lambda n: scores[n])
+    return ranked[0], ranked[1:], {n: float(v) for n, v in scores.items()}
 
 
 def evaluate_model(problem: Problem, effects: Sequence, *, repeats: int = 10,

@@ -14,6 +14,7 @@ from gyro_char.diagnosis import expected, spread
 from gyro_char.diagnosis import gap as diag_gap
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis import static as ds
+from gyro_char.diagnosis.choice import Criterion
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.spectra import model_spectrum
@@ -123,4 +124,5 @@ def closed_form_problem(records, dt, *, channel='gyro_x', max_samples=None,
             for i in range(len(recs))]
     problem.check = exp.calibrate(sims)
     problem.expect = exp
+    problem.choose = Criterion(problem.reals, problem.spaces)
     return problem

@@ -21,7 +21,9 @@ from typing import Optional, Sequence, Tuple
 
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_obs import layout, PSD_BINS, swing_observables, UNITS
+from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
+from gyro_char.diagnosis.swing_obs import (
+    layout, raw_parts, residuals, swing_observables, UNITS)
 from gyro_char.diagnosis.swing_spaces import signs, swing_spaces
 from gyro_char.diagnosis.twins import output_step, twin_effects
 from gyro_char.errors import InputError
@@ -58,7 +60,31 @@ def fit_baseline(imu: Recording, encoder: Recording, period_s: float,
         encoder_sigma=float(est.noise_encoder_rad), lsb=lsb, dt=dt,
         encoder_dt=float((al.tau_encoder[-1] - al.tau_encoder[0]) / (al.tau_encoder.size - 1)),
         duration=float(min(al.tau_gyro[-1], al.tau_encoder[-1])) + dt,
-        axis=al.axis.replace('gyro_', ''))
+        axis=al.axis.replace('gyro_', ''), gyro_start=stamp_offset(imu.t, encoder.t))
+
+
+def stamp_offset(t_g: np.ndarray, t_e: np.ndarray, count: int = 4096) -> float:
+    """
+    Where the gyro stamps fall in the encoder's sample interval at the start of the overlap (s).
+
+    The residual interpolates the encoder at the gyro stamps: how much of the encoder's
+    white noise passes into it, and how it correlates from sample to sample, depend on that
+    position (at one rate, a gyro stamp 0.2 intervals after each encoder sample smooths the
+    encoder noise: measured lag-1 increment correlation z = 98 on a 15-min 1 kHz run against
+    twins whose stamps coincided). The circular mean of the first ``count`` positions.
+    """
+    lo = max(t_g[0], t_e[0])
+    te = t_e[t_e >= lo]
+    tg = t_g[t_g >= lo][:count]
+    if te.size < 2 or tg.size < 1:
+        return 0.0
+    # The mean interval over the whole record: a median of jittered intervals is off by
+    # parts in 1e4, which over thousands of samples moves the phase by whole cycles.
+    dte = float((te[-1] - te[0]) / (te.size - 1))
+    j = np.arange(min(te.size, count))
+    grid = float(np.mean(te[:j.size] - j * dte))     # the encoder's grid, not one stamp
+    ph = np.exp(2j * np.pi * (tg - grid) / dte)
+    return float(np.angle(np.mean(ph)) % (2.0 * np.pi) / (2.0 * np.pi) * dte)
 
 
 def twin_config(base: SwingBaseline) -> BenchConfig:
@@ -77,12 +103,21 @@ def twin_config(base: SwingBaseline) -> BenchConfig:
         'noise': {ch: {'N': base.N, 'B': 0.0, 'K': 0.0, 'Q': 0.0, 'R': 0.0}},
     })
     cfg.encoder.adc_noise = encoder_white_sigma(base, cfg)
+    cfg.gyro.start_s = base.gyro_start
     return cfg
 
 
 def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
-    """IMU and encoder recordings of a twin: the baseline plus ``effects``."""
-    run = simulator.simulate_swing(twin_config(base), duration=base.duration,
+    """
+    IMU and encoder recordings of a twin: the baseline plus ``effects``.
+
+    A stamp delay candidate starts the gyro's instants that much earlier, so that its stamps
+    fall where the record's do (``stamp_offset`` measured them delay included).
+    """
+    cfg = twin_config(base)
+    cfg.gyro.start_s -= sum(float(p.get('delay_s', 0.0)) for n, p in effects
+                            if n == 'time_delay')
+    run = simulator.simulate_swing(cfg, duration=base.duration,
                                    seed=int(seed), effects=twin_effects(effects),
                                    channels=(f'gyro_{base.axis}',))
     return run.imu, run.encoder
@@ -94,7 +129,7 @@ def _obs(imu: Recording, encoder: Recording, base: SwingBaseline, ranges: dict) 
 
 
 def _white(o: dict) -> np.ndarray:
-    return 10 ** o['residual_psd'][: PSD_BINS // 2]
+    return 10 ** o['residual_psd']
 
 
 def encoder_white_sigma(base: SwingBaseline, cfg: BenchConfig) -> float:
@@ -115,8 +150,12 @@ def calibrate_n(base: SwingBaseline, real: dict, ranges: dict,
     Rescale N so that the twins' residual PSD in the gyro band matches the record's.
 
     The gyro filter's N is estimated from the angle residuals, which also carry the stand's
-    and the encoder's noise; the white band of the residual rate (1 Hz to ~10 % of the sample
-    rate, where the gyro's white noise dominates) pins it to about 1 %. The median of the
+    and the encoder's noise; the residual rate's PSD from 1 Hz to 1/8 of the sample rate
+    (where the gyro's white noise dominates) pins it. All the bins, not the lower half: on a
+    whole 15-min 1 kHz run the upper bins are the precise ones (a few hundred Welch
+    frequencies each), and the lower half's few, noisy ratios left N ~1 % high there, which
+    read as a -3 to -7 sigma deficit of the record in the upper bins and as a lag-1 increment
+    correlation 9 sigma off on clean runs. The median of the
     bins' record / twin ratios, not a ratio of band means: a strong odd nonlinearity puts its
     5f, 7f... lines into the lowest bins (a 2.5 s swing's 5f is at 2 Hz), and a band mean then
     reads them as white noise (measured: N 300x too high on the tanh-saturation runs).
@@ -233,7 +272,8 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
                           axis: Optional[str] = None, max_samples: Optional[int] = None,
                           names: Sequence[str] = SWING_EFFECTS,
                           bases: Optional[Sequence[SwingBaseline]] = None,
-                          scale_factor: Optional[float] = None) -> Problem:
+                          scale_factor: Optional[float] = None,
+                          method: str = 'expected') -> Problem:
     """
     Build the diagnosis problem for swing records (IMU, encoder, period) of one gyro.
 
@@ -241,15 +281,20 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     the overlap (twins are simulated at the same length). ``bases`` (fitted elsewhere) are used
     as given; otherwise each record's baseline is fitted and every twin gets the pooled
     scale-factor error (``scale_factor`` when given, e.g. a held-out check's frozen value).
-    ``problem.context`` is the list of the records' baselines.
+    ``problem.context`` is the list of the records' baselines (``samples``: gyro samples used).
+    ``method='expected'`` scores candidates on pseudo-twins (``swing_expect``: the baseline
+    twins' noise part, simulated once per seed, plus the effect's noise-free part);
+    ``'twins'`` simulates every twin of every candidate in full (``problem.twin`` always does).
     """
+    if method not in ('expected', 'twins'):
+        raise InputError(f'unknown swing method {method!r}: expected or twins')
     records = [(*_cut(i, e, max_samples), float(p)) for i, e, p in records]
     fitted = bases is None
     if fitted:
         bases = [fit_baseline(i, e, p, axis) for i, e, p in records]
         sf = pooled_scale_factor(bases)[0] if scale_factor is None else float(scale_factor)
         bases = [replace(b, scale_factor_error=sf) for b in bases]
-    bases = list(bases)
+    bases = [replace(b, samples=len(imu)) for b, (imu, _, _) in zip(bases, records)]
     if len({b.axis for b in bases}) > 1:
         raise InputError(f'the records swing different gyro axes: {[b.axis for b in bases]}; '
                          'give --axis')
@@ -287,16 +332,51 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
                                                 - first_scale[key]])
         return o
 
+    if method == 'expected':
+        simulate = expected_twins(bases, ranges, len(records) > 1)
+    else:
+        simulate = sim
     # Search spaces scaled to the longest record (the others' bounds differ by the ratio of
     # their peak rates, well inside the spans' decades).
     longest = max(bases, key=lambda b: b.duration)
     spaces = [s for s in swing_spaces(longest) if s.name in names]
-    spaces = signs(spaces, reals, sim)
+    spaces = signs(spaces, reals, simulate)
     units = dict(UNITS, scale_factor_shift='rad/s')
     baseline = bases[0].to_json()
     if len(bases) > 1:
         sf, sf_sigma = pooled_scale_factor(bases)
         baseline['pooled_scale_factor_error'] = {'value': sf, 'sigma': sf_sigma, 'unit': '1'}
         baseline['records'] = [b.to_json() for b in bases]
-    return Problem(kind='swing', reals=reals, simulate=sim, spaces=spaces, ranges=ranges,
-                   units=units, baseline=baseline, context=bases)
+    return Problem(kind='swing', reals=reals, simulate=simulate, spaces=spaces, ranges=ranges,
+                   units=units, baseline=baseline, context=bases, twin=sim)
+
+
+def expected_twins(bases: Sequence[SwingBaseline], ranges: Sequence[dict], shift: bool):
+    """
+    Return ``simulate(record, effects, seed)`` on pseudo-twins (``swing_expect``).
+
+    The noise part of record i and seed s is the full baseline twin of the twin path's seed,
+    simulated on first use; with ``shift`` (several records) each further record gets the
+    ``scale_factor_shift`` block against the first record's pseudo-twin of the same seed.
+    """
+    parts = EffectParts(bases, ranges, twin_config, record_scale)
+    noise = {}
+
+    def noise_of(i: int, seed: int) -> dict:
+        if (i, seed) not in noise:
+            b = bases[i]
+            imu, enc = simulate_twin(b, [], seed + 7919 * i)
+            raw = raw_parts(residuals(imu.t, imu.channels[f'gyro_{b.axis}'], enc.t,
+                                      enc.channels[ENCODER_CHANNEL], b.period_s), ranges[i])
+            raw['scale'] = record_scale(imu, enc, b.axis) if shift else 0.0
+            noise[(i, seed)] = raw
+        return noise[(i, seed)]
+
+    def simulate(i: int, effects: list, seed: int) -> dict:
+        fx = twin_effects(effects)
+        o, s = pseudo_twin(noise_of(i, seed), parts.part(i, fx))
+        if i > 0:
+            s0 = pseudo_twin(noise_of(0, seed), parts.part(0, fx))[1]
+            o['scale_factor_shift'] = np.array([s - s0])
+        return o
+    return simulate

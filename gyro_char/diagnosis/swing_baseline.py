@@ -24,6 +24,8 @@ class SwingBaseline:
     # gyro's one scale-factor error, pooled over the records diagnosed together).
     record_scale_factor_error: float = 0.0
     record_scale_factor_sigma: float = 0.0
+    samples: int = 0                # gyro samples analysed (0: not set)
+    gyro_start: float = 0.0         # gyro stamps' offset into the encoder interval, s
 
     @property
     def peak_rate(self) -> float:

@@ -42,7 +42,8 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
 Whole-record components rather than per-window ones: a constant effect's z grows with the
 record length instead of being spread over windows; the twins' repeats give the scatter.
 """
-from typing import List, Tuple
+from dataclasses import dataclass
+from typing import List, Optional, Tuple
 
 from gyro_char.swing.align import integrate
 import numpy as np
@@ -154,85 +155,163 @@ def band_peaks(lines: np.ndarray, amp: np.ndarray,
     return peaks, where
 
 
-def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
-    """
-    Apparent stamp-error variance per |cos th| bin, from the increments ``d`` (asinh, µs²).
-
-    Per bin k, the mean square of ``d`` minus that of the slowest bin, over twice the mean
-    squared swing rate (``peak_rate`` |cos th|) minus the slowest bin's: a white stamp error
-    of σ reads σ² in every bin. A difference, not a ratio, so that white angle noise (which
-    the baseline fit may have inflated with an encoder error it cannot model) cancels instead
-    of diluting it; asinh(x / 1 µs²) keeps the sign and compresses like a log above 1 µs².
-    """
+def rate_bins(th: np.ndarray, d: np.ndarray, peak_rate: float) -> Tuple[np.ndarray, np.ndarray]:
+    """Per |cos th| bin: mean square of the increments ``d`` and mean squared swing rate."""
     nb = len(RATE_EDGES) - 1
     c = np.abs(np.cos(th))
     k = np.clip(np.digitize(c, RATE_EDGES) - 1, 0, nb - 1)
     cnt = np.maximum(np.bincount(k, minlength=nb), 1)
-    ms = np.bincount(k, d * d, minlength=nb) / cnt
-    w2 = peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt
+    return (np.bincount(k, d * d, minlength=nb) / cnt,
+            peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt)
+
+
+def rate_locked_of(ms: np.ndarray, w2: np.ndarray) -> np.ndarray:
+    """
+    Apparent stamp-error variance per |cos th| bin (asinh, µs²) from ``rate_bins``.
+
+    Per bin k, the mean square of the increments minus that of the slowest bin, over twice
+    the mean squared swing rate minus the slowest bin's: a white stamp error of σ reads σ² in
+    every bin. A difference, not a ratio, so that white angle noise (which the baseline fit
+    may have inflated with an encoder error it cannot model) cancels instead of diluting it;
+    asinh(x / 1 µs²) keeps the sign and compresses like a log above 1 µs².
+    """
     var = (ms[1:] - ms[0]) / np.maximum(2.0 * (w2[1:] - w2[0]), 1e-300)
     return np.arcsinh(var / STAMP_UNIT ** 2)
 
 
-def increment_acf(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
-    """Normalised autocorrelation of the increments of ``r`` at lags 1..``lags``."""
+def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
+    """Apparent stamp-error variance per |cos th| bin of the increments ``d`` (asinh, µs²)."""
+    return rate_locked_of(*rate_bins(th, d, peak_rate))
+
+
+def increment_sums(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
+    """Per-sample lagged products of the centred increments of ``r`` at lags 0..``lags``."""
     d = np.diff(r)
     d = d - d.mean()
     # einsum, not np.dot: a threaded BLAS call costs more than the sum on a busy machine.
-    v = float(np.einsum('i,i->', d, d))
-    return np.array([np.einsum('i,i->', d[:-k], d[k:]) / max(v, 1e-300)
-                     for k in range(1, lags + 1)])
+    return np.array([np.einsum('i,i->', d[:d.size - k], d[k:]) / max(d.size, 1)
+                     for k in range(lags + 1)])
 
 
-def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarray,
-                      period_s: float, ranges: dict) -> SwingObs:
-    """All swing blocks of one record (gyro rate rad/s at ``t_g``, encoder rad at ``t_e``)."""
+def increment_acf(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
+    """Normalised autocorrelation of the increments of ``r`` at lags 1..``lags``."""
+    c = increment_sums(r, lags)
+    return c[1:] / max(c[0], 1e-300)
+
+
+@dataclass
+class Residuals:
+    """
+    The residual streams of one record and the swing geometry they are decomposed on.
+
+    ``r`` at the gyro stamps (``idx_g``: their sample numbers in the input), ``r_e`` at the
+    encoder stamps (``idx_e``); ``th`` / ``th_e`` the swing phase there, ``ts`` the normalised
+    time of the trend columns, ``phi`` the encoder angle. ``scale`` is the fitted (1 + Δρ).
+    """
+
+    r: np.ndarray
+    idx_g: np.ndarray
+    th: np.ndarray
+    ts: np.ndarray
+    dt: float
+    r_e: np.ndarray
+    idx_e: np.ndarray
+    th_e: np.ndarray
+    phi: np.ndarray
+    dt_e: float
+    peak_rate: float
+
+    def take(self, keep_g: np.ndarray, keep_e: np.ndarray) -> 'Residuals':
+        """Return the geometry restricted to the gyro and encoder samples ``keep_g``/``keep_e``."""
+        return Residuals(self.r[keep_g], self.idx_g[keep_g], self.th[keep_g], self.ts[keep_g],
+                         self.dt, self.r_e[keep_e], self.idx_e[keep_e], self.th_e[keep_e],
+                         self.phi[keep_e], self.dt_e, self.peak_rate)
+
+
+def residuals(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarray,
+              period_s: float) -> Residuals:
+    """Return the residual streams of a record (gyro rad/s at ``t_g``, encoder rad at ``t_e``)."""
     lo, hi = max(t_g[0], t_e[0]), min(t_g[-1], t_e[-1])
     m = (t_g >= lo) & (t_g <= hi)
     tau = t_g[m] - lo
     ang = integrate(tau, rate[m])
     e = np.interp(tau, t_e - lo, enc)
     w = 2.0 * np.pi / period_s
-    s1, c1 = np.sin(w * tau), np.cos(w * tau)
     span = max(tau[-1], 1e-9)
     ts = tau / span
     one = np.ones_like(tau)
-    ce = _solve([s1, c1, one, ts, ts * ts], e)
+    ce = _solve([np.sin(w * tau), np.cos(w * tau), one, ts, ts * ts], e)
     psi = float(np.arctan2(ce[1], ce[0]))
-    line = [one, ts, ts * ts]
-    k = _solve([e] + line, ang)
+    k = _solve([e, one, ts, ts * ts], ang)
     r = ang - k[0] * e - (k[1] + k[2] * ts + k[3] * ts * ts)
-    th = w * tau + psi
-    cols = [np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
-            np.cos(3 * th)]
-    h = _solve(cols + line, r)
-    dt = float(np.median(np.diff(tau)))
-    f, p = signal.welch(np.diff(r) / dt, fs=1.0 / dt, nperseg=min(2048, r.size // 8))
-    psd = np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
-                    else np.interp(0.5 * (a + b), f, p) for a, b in ranges['residual_psd']])
     # The same fit on the encoder stamps inside the gyro span.
     me = (t_e >= lo + tau[0]) & (t_e <= lo + tau[-1])
     tau_e, phi = t_e[me] - lo, enc[me]
     tse = tau_e / span
     r_e = np.interp(tau_e, tau, ang) - k[0] * phi - (k[1] + k[2] * tse + k[3] * tse * tse)
+    th_e = w * tau_e + psi
+    return Residuals(r, np.flatnonzero(m), w * tau + psi, ts, float(np.median(np.diff(tau))),
+                     r_e, np.flatnonzero(me), th_e, phi,
+                     max(float(np.median(np.diff(tau_e))), 1e-9),
+                     w * float(np.hypot(ce[0], ce[1])))
+
+
+def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
+              r_e: Optional[np.ndarray] = None) -> dict:
+    """
+    Return the additive parts of the observables of residual streams ``r`` and ``r_e``.
+
+    The record's own streams by default, on the geometry of ``res``. Linear parts (``harm``:
+    the harmonic coefficients) or quadratic ones (``psd`` power per bin, ``line2`` squared
+    line peaks and ``mean2`` mean squared amplitude per band, ``ms`` rate-bin mean squares,
+    ``acf`` lagged sums), so that the parts of a sum of independent residuals add in
+    expectation. ``finish`` turns them into the blocks.
+    """
+    r = res.r if r is None else r
+    r_e = res.r_e if r_e is None else r_e
+    th, ts = res.th, res.ts
+    h = _solve([np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
+                np.cos(3 * th), np.ones_like(ts), ts, ts * ts], r)
+    f, p = signal.welch(np.diff(r) / res.dt, fs=1.0 / res.dt, nperseg=min(2048, r.size // 8))
+    psd = np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
+                    else np.interp(0.5 * (a + b), f, p) for a, b in ranges['residual_psd']])
     # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
     # large, deterministic, and the harmonic blocks' business - must not pass for noise here.
-    hp_e = highpass(r_e, int(round(HP_SECONDS / max(float(np.median(np.diff(tau_e))), 1e-9))))
-    peaks, where = band_peaks(*line_spectrum(phi, hp_e))
+    hp_e = highpass(r_e, int(round(HP_SECONDS / res.dt_e)))
+    lines, amp = line_spectrum(res.phi, hp_e)
+    peaks, where = band_peaks(lines, amp)
+    band = np.clip(np.digitize(lines, LINE_EDGES) - 1, 0, LINE_EDGES.size - 2)
+    inside = (lines >= LINE_EDGES[0]) & (lines < LINE_EDGES[-1])
+    mean2 = (np.bincount(band[inside], amp[inside] ** 2, minlength=LINE_EDGES.size - 1)
+             / np.maximum(np.bincount(band[inside], minlength=LINE_EDGES.size - 1), 1))
     # Bands reaching above the encoder's angle Nyquist at the peak swing rate hold aliases of
     # the gyro/encoder stamp pattern, which twins at rates differing by ppm do not share (z
     # of 3 on clean records): a constant, so that they score nothing.
-    peak_rate = w * float(np.hypot(ce[0], ce[1]))
-    nyquist = np.pi / max(peak_rate * float(np.median(np.diff(tau_e))), 1e-300)
-    above = LINE_EDGES[1:] > nyquist
-    peaks[above], where[above] = 1.0, np.nan
-    th_e = w * 0.5 * (tau_e[1:] + tau_e[:-1]) + psi
+    above = LINE_EDGES[1:] > np.pi / max(res.peak_rate * res.dt_e, 1e-300)
+    ms, w2 = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_e), res.peak_rate)
     # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
-    out = SwingObs({'quadrature': h[1:2], 'harmonic_2f': h[2:4],
-                    'harmonic_3f': h[4:6],
-                    'residual_psd': np.log10(np.maximum(psd, 1e-300)),
-                    'encoder_lines': np.log10(np.maximum(peaks, 1e-300)),
-                    'rate_locked': rate_locked(th_e, np.diff(hp_e), peak_rate),
-                    'increment_acf': increment_acf(highpass(r, int(round(HP_SECONDS / dt))))})
+    return {'harm': h[1:6], 'psd': psd, 'line2': peaks * peaks, 'mean2': mean2, 'where': where,
+            'above': above, 'ms': ms, 'w2': w2,
+            'acf': increment_sums(highpass(r, int(round(HP_SECONDS / res.dt))))}
+
+
+def finish(raw: dict) -> 'SwingObs':
+    """Return the observable blocks from ``raw_parts`` (or sums of them)."""
+    lines = np.log10(np.sqrt(np.maximum(raw['line2'], 1e-300)))
+    where = np.array(raw['where'], dtype=float)
+    lines[raw['above']], where[raw['above']] = 0.0, np.nan
+    c = raw['acf']
+    out = SwingObs({'quadrature': raw['harm'][0:1], 'harmonic_2f': raw['harm'][1:3],
+                    'harmonic_3f': raw['harm'][3:5],
+                    'residual_psd': np.log10(np.maximum(raw['psd'], 1e-300)),
+                    'encoder_lines': lines,
+                    'rate_locked': rate_locked_of(raw['ms'], raw['w2']),
+                    'increment_acf': c[1:] / max(c[0], 1e-300)})
     out.line_peaks = where
     return out
+
+
+def swing_observables(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarray,
+                      period_s: float, ranges: dict) -> 'SwingObs':
+    """All swing blocks of one record (gyro rate rad/s at ``t_g``, encoder rad at ``t_e``)."""
+    return finish(raw_parts(residuals(t_g, rate, t_e, enc, period_s), ranges))

@@ -4,7 +4,8 @@ The ``diagnose`` job: where the sim-to-real gap lies and what explains it.
 Fits the paper's baseline model to each gyro channel of the input record(s), compares them with
 the model on a battery of observables - for static records their closed-form expectations over
 the whole record, checked by simulated twins (``diagnose_static``); for swing records
-simulated twins - ranks the catalogue effects and adds them greedily
+pseudo-twins over the whole run (``diagnosis.swing_expect``) - ranks the catalogue effects and
+adds them greedily
 (``gyro_char.diagnosis.engine``). Writes ``diagnosis.json`` (docs/design.md: the channel
 with the largest baseline gap at the top level, every channel under the extra ``per_channel``
 field) and ``diagnosis_<channel>.png`` in ``--out``. ``--holdout INPUT`` re-measures, on a
@@ -27,7 +28,8 @@ from typing import List, Optional
 from gyro_char.errors import InputError
 from gyro_char.io import read_imu
 from gyro_char.jobs.base import Console, measurement
-from gyro_char.jobs.diagnose_static import add_static_options, run_static
+from gyro_char.jobs.diagnose_static import (
+    add_static_options, check_repeats, posterior_predictive, run_static)
 from gyro_char.records import GYRO_CHANNELS
 import numpy as np
 
@@ -35,8 +37,9 @@ import numpy as np
 QUANTITIES = {'baseline_gap': '1', 'final_gap': '1', 'null_gap_q95': '1',
               'effects_selected': '1'}
 
-# The swing kind still scores candidates on simulated twins: its records are cut to this.
-SWING_MAX_SAMPLES = 2 ** 17
+# ``--method twins`` on swing records simulates every candidate in full: cut to this unless
+# --max-samples says otherwise (the default pseudo-twin path takes the whole record).
+SWING_TWINS_MAX_SAMPLES = 2 ** 17
 
 
 def add_options(p, require: bool = True) -> None:
@@ -56,8 +59,8 @@ def add_options(p, require: bool = True) -> None:
                         'closed forms), or per model (swing, static --method twins); '
                         'default 8')
     p.add_argument('--max-samples', type=int, default=None,
-                   help='analyse the first N samples of each record (default: static, the '
-                        'whole record; swing, 131072)')
+                   help='analyse the first N samples of each record (default: the whole '
+                        'record; swing --method twins: 131072)')
     p.add_argument('--seed', type=int, default=1)
     p.add_argument('--topic', default=None, help='sensor_msgs/Imu topic (bags)')
     p.add_argument('--period', default=None, metavar='SECONDS[,SECONDS...]',
@@ -175,6 +178,7 @@ def run_swing(args, console: Console) -> List[dict]:
     from gyro_char.diagnosis import engine as diagnose, swing as diag_swing
     from gyro_char.report.diagnosis_plot import plot_diagnosis
 
+    check = check_repeats(args)
     periods = _swing_periods(args)
     records = [_swing_record(p, per, args, console) for p, per in zip(args.inputs, periods)]
     hold = None
@@ -184,12 +188,17 @@ def run_swing(args, console: Console) -> List[dict]:
         once = periods[0] if args.period and ',' not in args.period else None
         hold = _swing_record(args.holdout, once, args, console)
     problem = diag_swing.swing_records_problem(records, axis=args.axis,
-                                               max_samples=args.max_samples or SWING_MAX_SAMPLES)
+                                               max_samples=swing_max_samples(args),
+                                               method=swing_method(args))
     diag = diagnose.run(problem, repeats=args.repeats, seed=args.seed, quiet=args.quiet)
     out = diag.to_json()
     bases = problem.context
     ch = f'gyro_{bases[0].axis}'
     out['channel'] = ch
+    out['method'] = swing_method(args)
+    out['analysed'] = swing_analysed(args.inputs, bases)
+    if swing_method(args) == 'expected' and check:
+        out['check'] = posterior_predictive(problem, diag, check, args.seed)
     out['per_record'] = per_record(args.inputs, bases)
     if hold is not None:
         out['holdout'] = swing_holdout_check(diag, hold, bases, args)
@@ -208,6 +217,25 @@ def run_swing(args, console: Console) -> List[dict]:
     print(summary(ch, out), file=console.out)
     print(f'wrote {args.out}/diagnosis.json and {", ".join(pngs)}', file=console.out)
     return tidy({ch: out})
+
+
+def swing_method(args) -> str:
+    """Return the swing problem's method: pseudo-twins ('expected', the default) or twins."""
+    return 'twins' if getattr(args, 'method', 'closed-form') == 'twins' else 'expected'
+
+
+def swing_max_samples(args):
+    """Return the gyro samples to analyse per swing record (None: the whole record)."""
+    if args.max_samples:
+        return args.max_samples
+    return SWING_TWINS_MAX_SAMPLES if swing_method(args) == 'twins' else None
+
+
+def swing_analysed(sources, bases) -> dict:
+    """Return the contract's ``analysed`` field of a swing diagnosis: gyro samples per record."""
+    per = [{'source': str(s), 'samples': int(b.samples), 'duration_s': float(b.samples * b.dt)}
+           for s, b in zip(sources, bases)]
+    return {'samples': per[0]['samples'], 'duration_s': per[0]['duration_s'], 'records': per}
 
 
 def per_record(sources, bases) -> list:
@@ -233,9 +261,8 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
 
     imu, enc, period = hold
     problem = diag_swing.swing_records_problem(
-        [(imu, enc, period)], axis=bases[0].axis,
-        max_samples=args.max_samples or SWING_MAX_SAMPLES,
-        scale_factor=bases[0].scale_factor_error)
+        [(imu, enc, period)], axis=bases[0].axis, max_samples=swing_max_samples(args),
+        scale_factor=bases[0].scale_factor_error, method=swing_method(args))
     seeds = [args.seed * 1000 + 500 + k for k in range(args.repeats)]
     objective = GapObjective(problem.reals, problem.simulate, seeds)
     base = objective.evaluate([])

@@ -24,11 +24,12 @@ STATIC_STEPS = 4      # greedy steps at most, static records on closed forms
 def add_static_options(p) -> None:
     """Add the static kind's options: method, posterior-predictive twins, Dask scheduler."""
     p.add_argument('--method', choices=('closed-form', 'twins'), default='closed-form',
-                   help='static: score candidates on closed-form expected observables '
-                        '(default) or on simulated twins (the earlier, slower path)')
+                   help='score candidates on closed-form expected observables (static) or '
+                        'pseudo-twins (swing) - the default - or on simulated twins (the '
+                        'earlier, slower path)')
     p.add_argument('--check', type=int, default=4, metavar='N',
-                   help='static: simulated twins of the selected model that check the closed '
-                        'forms and the fit (default 4; 0: none; else at least 3)')
+                   help='simulated twins of the selected model that check the closed forms '
+                        '(pseudo-twins) and the fit (default 4; 0: none; else at least 3)')
     p.add_argument('--scheduler', default=None, metavar='ADDRESS',
                    help='run the channels as tasks on this Dask scheduler (e.g. '
                         'tcp://127.0.0.1:8786); default: in this process')
@@ -67,14 +68,16 @@ def posterior_predictive(problem, diag, repeats: int, seed: int) -> dict:
     effects = list(diag.model)
     base_stats = diag.evaluations['baseline'].stats
     final_stats = diag.evaluations['final'].stats
-    twins = [diag_gap.sim_stats([problem.simulate(i, effects, seed * 1000 + 900 + k)
+    # The simulator's own twins: ``problem.twin`` where ``simulate`` approximates them.
+    simulate = problem.twin or problem.simulate
+    twins = [diag_gap.sim_stats([simulate(i, effects, seed * 1000 + 900 + k)
                                  for k in range(repeats)])
              for i in range(len(problem.reals))]
     gap = diag_gap.multi_gap(problem.reals, twins, [s.std for s in base_stats])
     z = {}
     for b in twins[0].mean:
-        dev = (twins[0].mean[b] - final_stats[0].mean[b]) / (final_stats[0].std[b]
-                                                             / np.sqrt(repeats))
+        se = np.maximum(final_stats[0].std[b] / np.sqrt(repeats), 1e-300)
+        dev = (twins[0].mean[b] - final_stats[0].mean[b]) / se
         z[b] = float(np.sqrt(np.mean(dev * dev)))
     return {'repeats': repeats, 'effects': [n for n, _ in effects], 'gap': gap,
             'closed_form_gap': diag.final_gap, 'closed_form_z': z}
@@ -146,14 +149,19 @@ def map_tasks(fn: Callable[[dict], dict], tasks: List[dict],
         return client.gather(client.map(fn, tasks, pure=False))
 
 
+def check_repeats(args) -> int:
+    """Return ``--check``: 0 (no check) or at least 3 twins, whose scatter is compared."""
+    if args.check < 0 or 0 < args.check < 3:
+        raise InputError('--check must be 0 (no check) or >= 3 (their scatter is compared)')
+    return args.check
+
+
 def run_static(args, recs, dts, hold, channels, emit: Callable[[str], None]) -> dict:
     """Diagnose every channel of the static records; return ``{channel: json dict}``."""
     if args.max_samples is not None and args.max_samples < 1024:
         raise InputError('--max-samples must be >= 1024')
-    if args.check < 0 or 0 < args.check < 3:
-        raise InputError('--check must be 0 (no check) or >= 3 (their scatter is compared)')
     opts = {'method': args.method, 'repeats': args.repeats, 'seed': args.seed,
-            'max_samples': args.max_samples, 'check': args.check}
+            'max_samples': args.max_samples, 'check': check_repeats(args)}
     tasks = [{'channel': ch, 'dt': dts[0], 'opts': opts,
               'records': [np.asarray(r.channels[ch], dtype=np.float64) for r in recs],
               'sources': [r.source for r in recs],

@@ -66,6 +66,9 @@ class GyroConfig:
     bias_drift: Dict[str, float]            # wdot0H, rad/s^2
     misalignment: float         # dtheta between sensitive and swing axis, rad
     misalignment_noise: float   # sigma of delta dtheta (white, per sample), rad
+    # First sample instant of a swing run's gyro, s (the encoder's is 0): where the gyro
+    # samples fall between encoder samples, which the diagnosis's twins copy from a record.
+    start_s: float = 0.0
 
 
 @dataclass

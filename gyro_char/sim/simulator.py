@@ -171,7 +171,8 @@ def _imu_chain(cfg: BenchConfig, ctx: SimContext, fx: Sequence[Effect], n: int,
         raise InputError(f'{n} output samples x {d} internal samples each is more than one '
                          f'in-memory run holds ({MAX_SAMPLES}); simulate shorter runs')
     g = cfg.gyro
-    t = sample_times(ni, dti, g.jitter_s, ctx.rng('jitter:gyro'))
+    t = sample_times(ni, dti, g.jitter_s, ctx.rng('jitter:gyro'),
+                     start=g.start_s if ctx.kind == 'swing' else 0.0)
     ctx.t = t
     ctx.t_out = t[d - 1::d]
     true_rate = np.zeros((3, ni))

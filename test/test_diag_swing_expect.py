@@ -1,0 +1,67 @@
+"""The swing pseudo-twins (``diagnosis.swing_expect``) against the bench simulator's twins."""
+import json
+
+from gyro_char.cli import main
+from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing
+from gyro_char.sim import simulator
+from gyro_char.sim.config import BenchConfig
+import numpy as np
+import pytest
+
+# Each effect well above its detectability on a 120 s, 200 Hz run, with the block it shows in.
+CASES = {
+    'time_delay': ([('time_delay', {'delay_s': 2e-3})], 'quadrature'),
+    'g_sensitivity': ([('g_sensitivity', {'gy': 2e-3})], 'quadrature'),
+    'scale_factor_nonlinearity': ([('scale_factor_nonlinearity', {'k2': 5e-2, 'k3': 1e-1})],
+                                  'harmonic_3f'),
+    'scale_factor_asymmetry': ([('scale_factor_asymmetry', {'a': 3e-3})], 'harmonic_2f'),
+    'encoder_cyclic_error': ([('encoder_cyclic_error', {'a1': 3e-5, 'a2': 0.0,
+                                                        'lines': 1000.0})], 'encoder_lines'),
+    'timestamp_jitter': ([('timestamp_jitter', {'sigma_s': 1e-4, 'stream': 2.0})],
+                         'rate_locked'),
+}
+# rms over a block's elements of (pseudo-twins' mean - twins' mean) / standard error of that
+# difference.
+TOLERANCE = 4.0
+
+
+@pytest.fixture(scope='module')
+def problem():
+    cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': 200.0}})
+    run = simulator.simulate_swing(cfg, duration=120.0, seed=3, channels=('gyro_x',))
+    return diag_swing.swing_problem(run.imu, run.encoder, 5.0)
+
+
+@pytest.mark.parametrize('name', list(CASES))
+def test_pseudo_twins_equal_the_simulator_twins_within_their_scatter(problem, name):
+    effects, block = CASES[name]
+    k = 6
+    pseudo = diag_gap.sim_stats([problem.simulate(0, effects, 100 + s) for s in range(k)])
+    twins = diag_gap.sim_stats([problem.twin(0, effects, 200 + s) for s in range(k)])
+    base = diag_gap.sim_stats([problem.simulate(0, [], 100 + s) for s in range(k)])
+    for b in twins.mean:
+        se = np.sqrt((pseudo.std[b] ** 2 + twins.std[b] ** 2) / k)
+        z = (pseudo.mean[b] - twins.mean[b]) / np.maximum(se, 1e-12)
+        assert np.sqrt(np.mean(z * z)) < TOLERANCE, (b, z)
+    # The effect shows where it should: the check is not passing on an invisible effect.
+    shown = (pseudo.mean[block] - base.mean[block]) / np.maximum(base.std[block], 1e-12)
+    assert np.max(np.abs(shown)) > 5.0, shown
+
+
+def test_a_fifteen_minute_run_is_analysed_whole_by_default(tmp_path):
+    # 15 minutes at a low rate (quick): every gyro sample of the record is looked at.
+    cfg = tmp_path / 'c.yaml'
+    cfg.write_text('gyro: {rate_hz: 40.0}\nencoder: {rate_hz: 200.0}\n')
+    rec = tmp_path / 'run'
+    assert main(['simulate', 'swing', '--out', str(rec), '--duration', '900', '--config',
+                 str(cfg), '--seed', '2', '--effect', 'time_delay:delay_s=0.004',
+                 '--quiet']) == 0
+    out = tmp_path / 'out'
+    assert main(['diagnose', '--kind', 'swing', str(rec / 'recording.mcap'), '--period', '5',
+                 '--out', str(out), '--repeats', '4', '--check', '3', '--quiet']) == 0
+    d = json.loads((out / 'diagnosis.json').read_text())
+    assert d['analysed']['samples'] == 36000 and d['analysed']['records'][0]['samples'] == 36000
+    assert d['analysed']['duration_s'] == pytest.approx(900.0, rel=1e-3)
+    assert d['method'] == 'expected' and d['selected_effects'][0] in ('time_delay',
+                                                                      'g_sensitivity')
+    assert d['check']['repeats'] == 3 and d['check']['effects'] == d['selected_effects']
