@@ -26,6 +26,7 @@ import pytest
 BIN = Path(sys.executable).parent
 CLI = 'import sys; from gyro_char.cli import main; sys.exit(main())'
 N_DEVICES = 5
+N_RESUME = 15
 
 
 def _wait(cond, timeout, what):
@@ -104,8 +105,13 @@ def test_worker_killed_mid_task_is_retried_elsewhere(cluster, tmp_path):
 
 
 def test_ctrl_c_then_the_same_command_resumes(cluster, tmp_path):
-    out = tmp_path / 'out'
-    argv = ['fleet', str(cluster['data']), '--scheduler', cluster['address'], '--out',
+    # Three times the module's devices, so that Ctrl-C after the first finished one lands while
+    # most are still queued however fast the machine is (with five, all could be done by then).
+    data, out = tmp_path / 'data', tmp_path / 'out'
+    data.mkdir()
+    for i in range(N_RESUME):
+        shutil.copy(cluster['data'] / f'imu{i % N_DEVICES}.csv', data / f'imu{i}.csv')
+    argv = ['fleet', str(data), '--scheduler', cluster['address'], '--out',
             str(out), '--allan-options=--boot 10 --seed 3']
     proc = subprocess.Popen([sys.executable, '-c', CLI] + argv, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True,
@@ -115,12 +121,12 @@ def test_ctrl_c_then_the_same_command_resumes(cluster, tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and 'the same command resumes' in err, err
     first = _outcomes(out)
-    assert 1 <= len(first) < N_DEVICES, 'interrupted too late to test the resume'
+    assert 1 <= len(first) < N_RESUME, 'interrupted too late to test the resume'
     stamps = {d: (out / 'devices' / d / 'noise.json').stat().st_mtime_ns for d in first}
     rc = main(argv + ['--quiet'])
     assert rc == 0
     after = _outcomes(out)
-    assert len(after) == N_DEVICES
+    assert len(after) == N_RESUME
     for d in first:  # finished before Ctrl-C: neither recomputed nor rewritten
         assert after[d] == first[d]
         assert (out / 'devices' / d / 'noise.json').stat().st_mtime_ns == stamps[d]

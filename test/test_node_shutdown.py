@@ -9,6 +9,9 @@ finished the run first, then failed on the shut-down context); swing_kf_node whi
 data; and every node while its process is still importing.
 """
 import signal
+import subprocess
+import sys
+import textwrap
 import time
 
 from gyro_char.live.checkpoint import load_checkpoint
@@ -172,9 +175,29 @@ def test_every_node_stops_while_still_importing():
         for sig, node in zip((signal.SIGTERM, signal.SIGINT, signal.SIGTERM), nodes):
             node.proc.send_signal(sig)
         for node in nodes:
-            assert node.stop(signal.SIGTERM, timeout=30.0) is not None
+            assert node.stop(signal.SIGTERM, timeout=30.0) is not None, node.output
     finally:
         for node in nodes:
             node.stop(signal.SIGKILL)
     for node in nodes:
         assert clean_exit_problems(node) == [], node.output
+
+
+def test_a_process_stuck_after_a_stop_signal_prints_its_stacks_and_exits():
+    """The deadline watchdog: a main thread that never returns (as in a stuck teardown)."""
+    code = textwrap.dedent("""
+        import os, signal, time
+        from gyro_char.nodes.shutdown import STOP
+        STOP.EXIT_DEADLINE_S = 1.0
+        STOP.install()
+        os.kill(os.getpid(), signal.SIGTERM)
+        def stuck_in_teardown():
+            time.sleep(60)
+        stuck_in_teardown()
+    """)
+    start = time.monotonic()
+    done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=30)
+    assert done.returncode == 1, done
+    assert 'stuck_in_teardown' in done.stderr, done.stderr
+    assert time.monotonic() - start < 20.0

@@ -13,11 +13,17 @@ then are the node and the context torn down (exit 0).
 Pure computations whose result is worthless once the process stops (generating a simulated run)
 run inside ``STOP.interruptible()``: there a signal raises ``Interrupted`` at once.
 
+A process that is still alive ``EXIT_DEADLINE_S`` after the first stop signal (a teardown stuck
+in C++ code, where no Python check runs) prints every thread's stack to stderr and exits with
+code 1: ``faulthandler``'s watchdog runs in its own C thread, without the GIL.
+
 Standard library only, so that the executables (``gyro_char.nodes.entry``) install the handlers
 before the heavy imports, which take seconds on a loaded machine.
 """
 import contextlib
+import faulthandler
 import signal
+import sys
 import threading
 from typing import Iterator, Optional
 
@@ -30,6 +36,7 @@ class StopSignal:
     """A process-wide stop request set by SIGINT / SIGTERM (or by ``request``)."""
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
+    EXIT_DEADLINE_S = 20.0
 
     def __init__(self) -> None:
         self._event = threading.Event()
@@ -57,6 +64,8 @@ class StopSignal:
                 signal.signal(sig, signal.SIG_IGN)
 
     def _handle(self, signum: int, frame) -> None:
+        if not self._event.is_set():  # the first signal arms the deadline, repeats do not
+            faulthandler.dump_traceback_later(self.EXIT_DEADLINE_S, exit=True, file=sys.stderr)
         self.request(signum)
         if self._interruptible:
             raise Interrupted(signal.Signals(signum).name)
