@@ -64,4 +64,5 @@ def test_a_fifteen_minute_run_is_analysed_whole_by_default(tmp_path):
     assert d['analysed']['duration_s'] == pytest.approx(900.0, rel=1e-3)
     assert d['method'] == 'expected' and d['selected_effects'][0] in ('time_delay',
                                                                       'g_sensitivity')
-    assert d['check']['repeats'] == 3 and d['check']['effects'] == d['selected_effects']
+    check = d['posterior_predictive']
+    assert check['repeats'] == 3 and check['effects'] == d['selected_effects']

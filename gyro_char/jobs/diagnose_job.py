@@ -198,7 +198,7 @@ def run_swing(args, console: Console) -> List[dict]:
     out['method'] = swing_method(args)
     out['analysed'] = swing_analysed(args.inputs, bases)
     if swing_method(args) == 'expected' and check:
-        out['check'] = posterior_predictive(problem, diag, check, args.seed)
+        out['posterior_predictive'] = posterior_predictive(problem, diag, check, args.seed)
     out['per_record'] = per_record(args.inputs, bases)
     if hold is not None:
         out['holdout'] = swing_holdout_check(diag, hold, bases, args)
