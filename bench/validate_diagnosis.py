@@ -15,6 +15,9 @@ generator:
 - temperature_drift: a hyperbolic warm-up A / (1 + t / tau) (catalogue: exponential);
 - bias_instability: flicker approximated by a sum of five Gauss-Markov processes with
   log-spaced correlation times (catalogue: Kasdin-Walter fractional integration);
+- bias_instability_band (scored as ``bias_instability``): a strong band-limited flicker, four
+  Gauss-Markov processes with correlation times 0.3-30 s (1/f between 0.005 and 0.5 Hz, 1/f^2
+  above: the shortest time sets the upper corner);
 - rate_random_walk: a random walk with Laplace-distributed increments held for 0.5 s;
 - gauss_markov: a second-order (two cascaded first-order) Markov process;
 - quantization: a white angle error uniform on one step, differenced into rate (catalogue: a
@@ -89,6 +92,17 @@ def gm_sum_flicker(x, rng, b):
     return x + b * out / np.sqrt(5.0) * 1.5
 
 
+def gm_band_flicker(x, rng, b):
+    """Four first-order Gauss-Markov processes, tau 0.3-30 s, equal variance per octave."""
+    out = np.zeros_like(x)
+    for tc in np.geomspace(0.3, 30.0, 4):
+        a = np.exp(-DT / tc)
+        w = rng.standard_normal(x.size) * np.sqrt(1 - a * a)
+        w[0] = rng.standard_normal()
+        out += signal.lfilter([1.0], [1.0, -a], w)
+    return x + b * out / 2.0
+
+
 def laplace_rw(x, rng, k):
     hold = int(0.5 / DT)
     steps = rng.laplace(0.0, 1.0 / np.sqrt(2.0), x.size // hold + 1) * k * np.sqrt(hold * DT)
@@ -127,6 +141,7 @@ SHAPES = {
                                               {'amplitude': 1e-2, 'tau': 30.0},
                                               {'amplitude': 5e-4, 'tau': 20.0}]),
     'bias_instability': (gm_sum_flicker, [{'b': 1e-3}, {'b': 3e-3}, {'b': 1e-4}]),
+    'bias_instability_band': (gm_band_flicker, [{'b': 1e-3}, {'b': 3e-3}, {'b': 2e-4}]),
     'rate_random_walk': (laplace_rw, [{'k': 3e-4}, {'k': 1e-3}, {'k': 3e-6}]),
     'gauss_markov': (gm2, [{'sigma': 3e-3, 'tc': 0.5}, {'sigma': 1e-2, 'tc': 1.0},
                            {'sigma': 5e-4, 'tc': 0.5}]),
@@ -137,6 +152,8 @@ SHAPES = {
                           {'sigma': SIG, 'freq': 23.0, 'q': 8.0},
                           {'sigma': 0.08 * SIG, 'freq': 17.0, 'q': 15.0}]),
 }
+# Shapes scored as another catalogue effect (the truth label is the effect family's name).
+LABELS = {'bias_instability_band': 'bias_instability'}
 # (effect, magnitude level) pairs; the tone goes through the smoothing filter, so the pair
 # with internal_lowpass uses the lower-frequency tone (the 31.7 Hz one would be filtered away).
 PAIRS = [(('vibration', 0), ('internal_lowpass', 0)),
@@ -220,10 +237,10 @@ def main(argv=None) -> int:
         todo = [c for c in todo if len(c[1]) == 1 and c[1][0][0] in args.only]
     for label, effects, seed in todo:
         d = run_case(effects, n, seed, args.repeats, args.method, shapes)
-        truth = [e for e, _ in effects]
+        truth = [LABELS.get(e, e) for e, _ in effects]
         detected = d.baseline_gap > d.null_gap['q95']
         top1 = d.ranking[0]['effect']
-        rows.append({'label': label, 'truth': truth, 'seed': seed,
+        rows.append({'label': label, 'truth': truth, 'shape': label, 'seed': seed,
                      'level': effects[0][1] if effects else None, 'detected': detected,
                      'selected': d.selected_effects, 'top1': top1,
                      'baseline_gap': d.baseline_gap, 'final_gap': d.final_gap,
@@ -244,10 +261,10 @@ def main(argv=None) -> int:
 def report(rows, names) -> None:
     single = [r for r in rows if len(r['truth']) == 1]
     print('\nconfusion (rows: true effect, columns: first selected effect; detected cases)')
-    cols = names + ['none']
+    cols = [n for n in names if n not in LABELS] + ['none']
     print(' ' * 18 + ' '.join(f'{c[:8]:>8s}' for c in cols))
     for name in names:
-        sel = [r for r in single if r['truth'][0] == name and r['detected']]
+        sel = [r for r in single if r['shape'] == name and r['detected']]
         counts = [sum(1 for r in sel if (r['selected'] or ['none'])[0] == c) for c in cols]
         print(f'{name[:18]:18s}' + ' '.join(f'{c:8d}' for c in counts))
     det = [r for r in single if r['detected']]

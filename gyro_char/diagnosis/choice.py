@@ -49,11 +49,15 @@ class Criterion:
 
     def __init__(self, reals: Sequence[dict], spaces: Sequence[EffectSpace]):
         self.reals = list(reals)
-        self.free = {s.name: len(s.params) for s in spaces}
+        self.params = {s.name: list(s.params) for s in spaces}
         self.log_n = float(np.log(max(element_count(self.reals), 2)))
 
+    def free(self, name: str, params: dict) -> int:
+        """Return the free parameters of one effect (an optional part that is off is not)."""
+        return sum(1 for p in self.params.get(name, ()) if not p.is_off(params.get(p.name, 1.0)))
+
     def __call__(self, ev: Evaluation) -> float:
-        k = sum(self.free.get(name, 0) for name, _ in ev.effects)
+        k = sum(self.free(name, params) for name, params in ev.effects)
         return deviance(self.reals, ev) + k * self.log_n
 
 

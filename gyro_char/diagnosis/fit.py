@@ -30,6 +30,9 @@ class Param:
     refinement); ``sign`` = -1 searches the magnitude of a negative parameter. A ``choice`` is
     a whole-number structural parameter (a filter's number of stages, a process's order) that
     changes what the other parameters mean: they are fitted anew for each of its values.
+    ``off_at_hi``: the upper bound means "absent" and is stored as 0 (a corner frequency at or
+    above where it could show); the search starts there, so the effect is first fitted
+    without this part, and a criterion counts the parameter as free only when it is not off.
     """
 
     name: str
@@ -39,6 +42,11 @@ class Param:
     integer: bool = False
     sign: float = 1.0
     choice: bool = False
+    off_at_hi: bool = False
+
+    def is_off(self, value: float) -> bool:
+        """Return True if ``value`` is this parameter's "absent" value (``off_at_hi``)."""
+        return self.off_at_hi and value == 0.0
 
 
 @dataclass
@@ -50,6 +58,8 @@ class EffectSpace:
     fixed: dict = field(default_factory=dict)
     # Data-driven starting values (e.g. the frequency of a detected tone), if any.
     start: dict = field(default_factory=dict)
+    # Coordinate passes at least (2 where one parameter shifts another's best value).
+    passes: int = 1
 
 
 @dataclass
@@ -88,11 +98,15 @@ class GapObjective:
 
 
 def _to_u(p: Param, v: float) -> float:
+    if p.is_off(v):
+        v = p.hi
     v = abs(v)
     return float(np.log(v)) if p.log else float(v)
 
 
 def _from_u(p: Param, u: float) -> float:
+    if p.off_at_hi and u >= _to_u(p, p.hi) - 1e-12:
+        return 0.0
     v = float(np.exp(u)) if p.log else float(u)
     return p.sign * (float(np.round(v)) if p.integer else v)
 
@@ -123,8 +137,10 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
                            grid=grid, refine=refine, passes=passes, near=near, at=at)
                 for v in values]
         return min(fits, key=lambda f: f[1].gap)
-    values = {p.name: space.start.get(p.name, _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi))))
+    values = {p.name: space.start.get(p.name, 0.0 if p.off_at_hi else
+                                      _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi))))
               for p in space.params}
+    passes = max(passes, space.passes)
     if near:
         values.update({k: v for k, v in near.items() if k in values})
     best = None

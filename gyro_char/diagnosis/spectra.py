@@ -47,6 +47,19 @@ def _resonance(sigma: float, freq_hz: float, q: float, dt: float) -> Callable:
     return psd
 
 
+def _flicker(b: float, corner_hz: float, dt: float) -> Callable:
+    # Kasdin-Walter 1/f; with an upper corner times the half-order lowpass of noise_gen.flicker,
+    # (1 - c) / |1 - c e^(-i w)|, c = exp(-2 pi corner dt): 1/f^2 above the corner.
+    if not corner_hz:
+        return lambda f: b * b * dt / (2.0 * np.sqrt(_sin2(f, dt)))
+    c = float(np.exp(-2.0 * np.pi * corner_hz * dt))
+
+    def psd(f):
+        den = np.sqrt(1.0 - 2.0 * c * np.cos(2.0 * np.pi * f * dt) + c * c)
+        return b * b * dt / (2.0 * np.sqrt(_sin2(f, dt))) * (1.0 - c) / den
+    return psd
+
+
 def _sin2(f, dt):
     s = np.sin(np.pi * f * dt)
     return np.maximum(s * s, 1e-300)
@@ -55,8 +68,7 @@ def _sin2(f, dt):
 def internal_psd(name: str, p: dict, dt_i: float) -> Optional[Callable]:
     """Two-sided PSD per Hz at the internal rate of one noise effect (None: not a noise)."""
     if name == 'bias_instability':
-        b = p['B']
-        return lambda f: b * b * dt_i / (2.0 * np.sqrt(_sin2(f, dt_i)))
+        return _flicker(p['B'], p.get('corner_hz', 0.0), dt_i)
     if name == 'rate_random_walk':
         k = p['K']
         return lambda f: k * k * dt_i * dt_i / (4.0 * _sin2(f, dt_i))

@@ -164,8 +164,14 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'internal_lowpass': EffectSpace('internal_lowpass', [
             Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
             fixed={'decimation': 8.0}),
+        # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
+        # output Nyquist frequency, means no corner): B first without a corner, then the
+        # corner, then both again (a corner moves the best B). The corner's lower bound keeps
+        # 1.5 decades of 1/f in the record (below, the process is a rate random walk).
         'bias_instability': EffectSpace('bias_instability', [
-            Param('B', 0.1 * sig_long, b_hi)]),
+            Param('B', 0.1 * sig_long, b_hi),
+            Param('corner_hz', min(30.0 / length, 0.05 / dt), 0.5 / dt, off_at_hi=True)],
+            passes=2),
         'rate_random_walk': EffectSpace('rate_random_walk', [
             Param('K', 0.1 * k_long, k_hi)]),
         'gauss_markov': EffectSpace('gauss_markov', [

@@ -25,12 +25,18 @@ import numpy as np
 from scipy import fft as sfft
 
 
-def flicker(n: int, rng: np.random.Generator, alpha: float = 1.0) -> np.ndarray:
+def flicker(n: int, rng: np.random.Generator, alpha: float = 1.0,
+            corner: float = 0.0) -> np.ndarray:
     """
     Return ``n`` samples of 1/f^alpha noise (Kasdin & Walter 1992), unit innovation variance.
 
     The filter h_0 = 1, h_k = h_{k-1} (k - 1 + alpha/2) / k is the impulse response of
     (1 - z^-1)^(-alpha/2); it is applied by a zero-padded FFT convolution (no wrap-around).
+    ``corner`` > 0 (cycles per sample): band-limited flicker, the same noise also through
+    (1 - b)^(alpha/2) (1 - b z^-1)^(-alpha/2), b = exp(-2 pi corner), whose impulse response
+    is (1 - b)^(alpha/2) b^k h_k: unit gain at low frequency, PSD times
+    ((1 - b) / |1 - b e^(-i w)|)^alpha, i.e. 1/f turning 1/f^2 above the corner (alpha = 1).
+    The same random numbers are drawn with or without the corner.
     """
     if n <= 0:
         return np.zeros(0)
@@ -40,7 +46,13 @@ def flicker(n: int, rng: np.random.Generator, alpha: float = 1.0) -> np.ndarray:
     h[1:] = np.cumprod((k - 1.0 + alpha / 2.0) / k)
     w = rng.standard_normal(n)
     nfft = sfft.next_fast_len(2 * n, real=True)
-    y = sfft.irfft(sfft.rfft(h, nfft) * sfft.rfft(w, nfft), nfft)[:n]
+    spec = sfft.rfft(h, nfft)
+    if corner > 0:
+        b = float(np.exp(-2.0 * np.pi * corner))
+        # b^k underflows to 0 beyond ~700 / (2 pi corner) samples: the tail is exactly 0 there.
+        g = (1.0 - b) ** (alpha / 2.0) * np.exp(np.arange(n) * np.log(b)) * h
+        spec = spec * sfft.rfft(g, nfft)
+    y = sfft.irfft(spec * sfft.rfft(w, nfft), nfft)[:n]
     return y
 
 

@@ -154,9 +154,32 @@ class BiasInstability(_NoiseTerm):
     term = 'B'
     summary = 'flicker (1/f) bias noise: the flat Allan floor 0.664 B'
     physics = ('1/f rate noise (Kasdin-Walter fractional integration, noise_gen): PSD '
-               'B^2 / (pi f), Allan variance 2 ln2 / pi B^2 (flat floor 0.664 B).')
+               'B^2 / (pi f), Allan variance 2 ln2 / pi B^2 (flat floor 0.664 B). '
+               'corner_hz > 0: band-limited flicker, as a sum of Gauss-Markov processes '
+               'with log-spaced correlation times is (real MEMS bias instability; the '
+               'shortest time sets the corner): the same flicker through the half-order '
+               'lowpass (1 - b)^(1/2) (1 - b z^-1)^(-1/2), b = exp(-2 pi corner_hz dt), at '
+               'the internal rate: PSD B^2 / (pi f) / sqrt(1 + (f / corner_hz)^2) in the '
+               'continuous limit, 1/f below the corner (floor 0.664 B at tau >> '
+               '1 / corner_hz), 1/f^2 above it.')
     PARAMS = {'B': (10.0 * DEG / 3600.0, 'rad/s', 'IEEE bias-instability coefficient'),
-              'axis': _axis_param()}
+              'axis': _axis_param(),
+              'corner_hz': (0.0, 'Hz', 'upper corner: 1/f below, 1/f^2 above (0: none)')}
+
+    def check(self):
+        super().check()
+        if self.corner_hz < 0:
+            raise InputError('bias_instability: corner_hz must be >= 0')
+
+    def sensor(self, ctx, gyro, accel):
+        if not self.corner_hz:
+            return super().sensor(ctx, gyro, accel)   # 1/f up to Nyquist, as always
+        gyro = gyro.copy()
+        rng = self.rng(ctx)
+        for r in _rows(self):
+            gyro[r] += self.B * noise_gen.flicker(gyro.shape[1], rng,
+                                                  corner=self.corner_hz * ctx.dt_internal)
+        return gyro, accel
 
 
 @register

@@ -1,0 +1,73 @@
+"""Band-limited flicker (``bias_instability`` with ``corner_hz``): simulator, closed form, search."""
+from gyro_char.diagnosis import expected, static
+from gyro_char.diagnosis.spectra import model_spectrum
+from gyro_char.errors import InputError
+from gyro_char.sim import noise_gen
+from gyro_char.sim.effects import EFFECTS
+import numpy as np
+import pytest
+from scipy import signal
+
+DT = 0.01
+BASE = static.StaticBaseline(N=7e-4, bias=0.0, drift=0.0, lsb=0.0, dt=DT)
+
+
+def _exact_avar(c: np.ndarray, m: int) -> float:
+    # Allan variance of unit innovations through the causal filter c: the estimator is the
+    # filter (C_j - 2 C_(j-m) + C_(j-2m)) / (sqrt(2) m) on the innovations, C = cumsum(c).
+    big = np.concatenate([np.zeros(2 * m + 1), np.cumsum(c)])
+    g = big[2 * m:] - 2.0 * big[m:-m] + big[:-2 * m]
+    return float(np.dot(g, g) / (2.0 * m * m))
+
+
+def test_default_is_the_unbounded_flicker_bit_for_bit():
+    n = 5000
+    plain = static.simulate_twin(BASE, n, [('bias_instability', {'B': 3e-4})], 4)
+    zero = static.simulate_twin(BASE, n, [('bias_instability', {'B': 3e-4, 'corner_hz': 0.0})],
+                                4)
+    assert np.array_equal(plain, zero)
+    assert np.array_equal(noise_gen.flicker(n, np.random.default_rng(1)),
+                          noise_gen.flicker(n, np.random.default_rng(1), corner=0.0))
+    f = np.linspace(0.01, 50.0, 300)
+    a = model_spectrum(7e-4, 0.0, DT, [('bias_instability', {'B': 3e-4})]).one_sided(f)
+    b = model_spectrum(7e-4, 0.0, DT, [('bias_instability', {'B': 3e-4, 'corner_hz': 0.0})])
+    assert np.array_equal(a, b.one_sided(f))
+    with pytest.raises(InputError):
+        EFFECTS['bias_instability'](B=1e-4, corner_hz=-1.0).check()
+
+
+@pytest.mark.parametrize('corner_hz', [0.05, 2.0])
+def test_closed_form_allan_equals_the_generators_exact_avar(corner_hz):
+    # Independent of the PSD: the generator's own impulse response (h * (1-b)^(1/2) b^k h).
+    n, b_coef = 2 ** 16, 5e-5
+    g = expected.grids(n, DT)
+    spec = model_spectrum(0.0, 0.0, DT, [('bias_instability', {'B': b_coef,
+                                                               'corner_hz': corner_hz})])
+    got = expected.avar(spec, g)[:10]
+    c_pole = np.exp(-2.0 * np.pi * corner_hz * DT)
+    want = []
+    for m in g.m[:10]:
+        length = 2000 * int(m)
+        k = np.arange(1, length, dtype=np.float64)
+        h = np.concatenate([[1.0], np.cumprod((k - 0.5) / k)])
+        band = np.sqrt(1.0 - c_pole) * c_pole ** np.arange(length) * h
+        c = signal.fftconvolve(h, band)[:length]
+        want.append(b_coef ** 2 * _exact_avar(c, int(m)))
+    np.testing.assert_allclose(got, want, rtol=5e-3)
+
+
+def test_corner_keeps_the_floor_at_long_tau_and_bends_the_spectrum_above_it():
+    n, b_coef, fc = 2 ** 20, 1e-4, 0.2
+    g = expected.grids(n, DT)
+    flat = expected.avar(model_spectrum(0.0, 0.0, DT, [('bias_instability', {'B': b_coef})]), g)
+    spec = model_spectrum(0.0, 0.0, DT, [('bias_instability', {'B': b_coef,
+                                                               'corner_hz': fc})])
+    band = expected.avar(spec, g)
+    long_ = g.m * DT > 50.0 / fc
+    assert np.all(np.abs(band[long_] / flat[long_] - 1.0) < 0.05)
+    assert band[0] < 0.2 * flat[0]     # the high-frequency part of the flicker is gone
+    # 1/f below the corner, 1/f^2 well above it (the PSD's log-log slope).
+    f = np.array([0.002, 0.004, 5.0, 10.0])
+    s = spec.one_sided(f)
+    assert np.log(s[1] / s[0]) / np.log(2.0) == pytest.approx(-1.0, abs=0.03)
+    assert np.log(s[3] / s[2]) / np.log(2.0) == pytest.approx(-2.0, abs=0.1)
