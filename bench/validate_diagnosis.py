@@ -15,9 +15,9 @@ generator:
 - temperature_drift: a hyperbolic warm-up A / (1 + t / tau) (catalogue: exponential);
 - bias_instability: flicker approximated by a sum of five Gauss-Markov processes with
   log-spaced correlation times (catalogue: Kasdin-Walter fractional integration);
-- bias_instability_band (scored as ``bias_instability``): a strong band-limited flicker, four
-  Gauss-Markov processes with correlation times 0.3-30 s (1/f between 0.005 and 0.5 Hz, 1/f^2
-  above: the shortest time sets the upper corner);
+- bias_instability_band (scored as ``bias_instability``): a band-limited flicker, four
+  Gauss-Markov processes with correlation times 0.2-200 s, one per decade (1/f with a ripple
+  between ~1e-3 and 0.8 Hz, 1/f^2 above: the shortest time sets the upper corner);
 - rate_random_walk: a random walk with Laplace-distributed increments held for 0.5 s;
 - gauss_markov: a second-order (two cascaded first-order) Markov process;
 - quantization: a white angle error uniform on one step, differenced into rate (catalogue: a
@@ -93,9 +93,9 @@ def gm_sum_flicker(x, rng, b):
 
 
 def gm_band_flicker(x, rng, b):
-    """Four first-order Gauss-Markov processes, tau 0.3-30 s, equal variance per octave."""
+    """Four first-order Gauss-Markov processes, tau 0.2-200 s, equal variance each."""
     out = np.zeros_like(x)
-    for tc in np.geomspace(0.3, 30.0, 4):
+    for tc in np.geomspace(0.2, 200.0, 4):
         a = np.exp(-DT / tc)
         w = rng.standard_normal(x.size) * np.sqrt(1 - a * a)
         w[0] = rng.standard_normal()
