@@ -34,6 +34,10 @@ def test_criterion_counts_each_effects_free_parameters():
     ev2 = Evaluation([('gauss_markov', {}), ('baseline_white_noise', {})], 0.0, [base])
     n = sum(np.size(v) for v in p.reals[0].values())
     assert abs(p.choose(ev2) - p.choose(ev0) - 3 * np.log(n)) < 1e-9   # sigma, tau_s, order
+    # A flicker's upper corner counts only when it is on (corner_hz = 0: no corner).
+    for corner, k in ((0.0, 1), (0.5, 2)):
+        ev = Evaluation([('bias_instability', {'B': 1e-4, 'corner_hz': corner})], 0.0, [base])
+        assert abs(p.choose(ev) - p.choose(ev0) - k * np.log(n)) < 1e-9
 
 
 def test_a_strong_random_walk_is_named_so_not_a_gauss_markov_process():

@@ -1,4 +1,4 @@
-"""Band-limited flicker (``bias_instability`` with ``corner_hz``): simulator, closed form, search."""
+"""Band-limited flicker (bias_instability with corner_hz): simulator, closed form, search."""
 from gyro_char.diagnosis import expected, static
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.errors import InputError
@@ -71,3 +71,33 @@ def test_corner_keeps_the_floor_at_long_tau_and_bends_the_spectrum_above_it():
     s = spec.one_sided(f)
     assert np.log(s[1] / s[0]) / np.log(2.0) == pytest.approx(-1.0, abs=0.03)
     assert np.log(s[3] / s[2]) / np.log(2.0) == pytest.approx(-2.0, abs=0.1)
+
+
+def _diagnose(effects, seed, n=180000):
+    from gyro_char.diagnosis import engine, static_expect
+    base = static.StaticBaseline(N=7e-4, bias=0.0, drift=0.0, lsb=0.05 * np.pi / 180.0, dt=DT)
+    x = static.simulate_twin(base, n, effects, seed)
+    p = static_expect.closed_form_problem([x], DT, twins=5, seed=seed + 1)
+    return engine.run(p, repeats=5, seed=seed + 1, max_steps=2)
+
+
+def test_search_finds_the_corner_of_a_band_limited_flicker():
+    # Half an hour of the simulator's band-limited flicker, 1/f^2 above 0.3 Hz: without the
+    # corner the catalogue named a Gauss-Markov process (free correlation time) for it.
+    d = _diagnose([('bias_instability', {'B': 1e-3, 'corner_hz': 0.3})], seed=31)
+    assert d.selected_effects[:1] == ['bias_instability']
+    fit = dict(d.model)['bias_instability']
+    assert 0.15 < fit['corner_hz'] < 0.6, fit
+    assert abs(fit['B'] / 1e-3 - 1.0) < 0.3, fit
+    assert d.final_gap < 0.3 * d.baseline_gap
+
+
+def test_unbounded_flicker_and_gauss_markov_keep_their_names():
+    # The extra freedom must not steal a first-order Gauss-Markov process (flat below its
+    # corner, which no flicker is) nor invent a corner for the plain 1/f flicker.
+    d = _diagnose([('gauss_markov', {'sigma': 3e-3, 'tau_s': 2.0, 'order': 1.0})], seed=33)
+    assert d.selected_effects[:1] == ['gauss_markov']
+    d = _diagnose([('bias_instability', {'B': 1e-3})], seed=35)
+    assert d.selected_effects[:1] == ['bias_instability']
+    fit = dict(d.model)['bias_instability']
+    assert fit['corner_hz'] == 0.0 or fit['corner_hz'] > 10.0, fit
