@@ -89,7 +89,9 @@ def test_search_finds_the_corner_of_a_band_limited_flicker():
     fit = dict(d.model)['bias_instability']
     assert 0.15 < fit['corner_hz'] < 0.6, fit
     assert abs(fit['B'] / 1e-3 - 1.0) < 0.3, fit
-    assert d.final_gap < 0.3 * d.baseline_gap
+    # A strong long-memory process scatters far beyond the baseline's twins: the right model
+    # ends near the gap its own twins score against each other (~7 here), not near 1.
+    assert d.final_gap < 2.0 * d.null_gap['final_model_mean'] < d.baseline_gap
 
 
 def test_unbounded_flicker_and_gauss_markov_keep_their_names():
@@ -100,4 +102,6 @@ def test_unbounded_flicker_and_gauss_markov_keep_their_names():
     d = _diagnose([('bias_instability', {'B': 1e-3})], seed=35)
     assert d.selected_effects[:1] == ['bias_instability']
     fit = dict(d.model)['bias_instability']
-    assert fit['corner_hz'] == 0.0 or fit['corner_hz'] > 10.0, fit
+    # No corner, or one where this flicker is below a tenth of the white noise (above
+    # B^2 / (0.2 pi N^2) = 3.2 Hz), i.e. none the record can see.
+    assert fit['corner_hz'] == 0.0 or fit['corner_hz'] > 3.2, fit

@@ -133,7 +133,7 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
                   else np.arange(int(p.lo), int(p.hi) + 1, dtype=float))
         fits = [fit_effect(objective, selected,
                            EffectSpace(space.name, rest, {**space.fixed, p.name: float(v)},
-                                       space.start),
+                                       space.start, space.passes),
                            grid=grid, refine=refine, passes=passes, near=near, at=at)
                 for v in values]
         return min(fits, key=lambda f: f[1].gap)
