@@ -140,7 +140,8 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
     values = {p.name: space.start.get(p.name, 0.0 if p.off_at_hi else
                                       _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi))))
               for p in space.params}
-    passes = max(passes, space.passes)
+    if not near:   # a refit near an earlier fit keeps to the caller's passes
+        passes = max(passes, space.passes)
     if near:
         values.update({k: v for k, v in near.items() if k in values})
     best = None

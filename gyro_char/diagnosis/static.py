@@ -166,8 +166,9 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             fixed={'decimation': 8.0}),
         # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
         # output Nyquist frequency, means no corner): B first without a corner, then the
-        # corner, then both again (a corner moves the best B). The corner's lower bound keeps
-        # 1.5 decades of 1/f in the record (below, the process is a rate random walk).
+        # corner, then both again (a corner moves the best B; refits near it: one pass). The
+        # corner's lower bound keeps 1.5 decades of 1/f in the record (below, the process is a
+        # rate random walk).
         'bias_instability': EffectSpace('bias_instability', [
             Param('B', 0.1 * sig_long, b_hi),
             Param('corner_hz', min(30.0 / length, 0.05 / dt), 0.5 / dt, off_at_hi=True)],
