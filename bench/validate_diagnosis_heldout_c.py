@@ -42,7 +42,7 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
 - quantization: the dithered angle error is uniform on one step and white (variance step^2 /
   12 whatever the step): relative Allan excess 3 v / (N^2 dt) at tau = dt less a tenth of it at
   10 dt, against sqrt(3 / n + 40 / (3 n)).
-Edges are set at z ~ 4; weak and strong are 10-1600x further above.
+Edges are set at z ~ 4; weak and strong are 8-1600x further above.
 """
 from gyro_char.allan.expected import markov_avar
 from gyro_char.sim.effects.sensor import resonance_coefficients
@@ -158,7 +158,7 @@ def lag1(cutoff: float) -> float:
 
 
 def fundamental(amplitude: float, dt: float, n: int) -> float:
-    """Line of the thermostat waveform at 1 / THERMO_PERIOD over ``n`` samples, mean over phases."""
+    """Thermostat waveform's line at 1 / THERMO_PERIOD over ``n`` samples, mean over phases."""
     t = np.arange(n) * dt
     cols = np.c_[np.sin(2 * np.pi * t / THERMO_PERIOD), np.cos(2 * np.pi * t / THERMO_PERIOD),
                  np.ones(n)]

@@ -222,15 +222,15 @@ def main(argv=None) -> int:
     ap.add_argument('--encoder-rate', type=float, default=ENCODER_RATE_HZ,
                     help='encoder rate, Hz (1000)')
     ap.add_argument('--held-out', nargs='?', const='b', choices=('b', 'c'), default=None,
-                    help=f"a held-out set instead of this file's shapes: b (the flag alone) = "
-                         f"bench/{HELD_OUT}.py, c = bench/{HELD_OUT}_c.py")
+                    help=f'a held-out set instead of the shapes here: b (the flag alone) = '
+                         f'bench/{HELD_OUT}.py, c = bench/{HELD_OUT}_c.py')
     args = ap.parse_args(argv)
     shape_set = (held_out_shapes(args.rate, args.held_out) if args.held_out
                  else shapes(args.rate))
     run = {'duration': args.duration, 'rate_hz': args.rate,
            'encoder_rate_hz': args.encoder_rate, 'shape_set': shape_set}
     print(f'runs of {args.duration:g} s, gyro {args.rate:g} Hz, encoder {args.encoder_rate:g} '
-          f'Hz; shapes: {f"held-out {args.held_out}" if args.held_out else "this harness"}',
+          f'Hz; shapes: ' + (f'held-out {args.held_out}' if args.held_out else 'this harness'),
           flush=True)
     rows, t0 = [], time.time()
     for mode, truth, seed in cases(args.mode, args.quick, args.seeds, shape_set):
