@@ -39,6 +39,10 @@ class Param:
     integer: bool = False
     sign: float = 1.0
     choice: bool = False
+    # Where the search starts (default: the middle of the range); unlike ``EffectSpace.start``
+    # still searched. An optional refinement (a gyro lag, a stamp error's correlation time)
+    # starts at the end where it is absent, so the main parameter is fitted as without it.
+    init: Optional[float] = None
 
 
 @dataclass
@@ -123,7 +127,8 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
                            grid=grid, refine=refine, passes=passes, near=near, at=at)
                 for v in values]
         return min(fits, key=lambda f: f[1].gap)
-    values = {p.name: space.start.get(p.name, _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi))))
+    values = {p.name: space.start.get(p.name, _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi)))
+                                      if p.init is None else p.init)
               for p in space.params}
     if near:
         values.update({k: v for k, v in near.items() if k in values})
