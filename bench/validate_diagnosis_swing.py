@@ -142,7 +142,7 @@ def one_pole_iir(imu_t, gyro, enc_t, enc_angle, stand, rng, tau):
 
 
 def gm_stamps(imu_t, gyro, enc_t, enc_angle, stand, rng, sigma, tau):
-    """Encoder stamps off by a Gauss-Markov error (``sigma``, ``tau``), drawn every 4 samples."""
+    """Move the encoder stamps by a Gauss-Markov error (``sigma``, ``tau``) drawn per 4 samples."""
     tk = enc_t[::4]
     phi = float(np.exp(-float(np.median(np.diff(tk))) / tau))
     w = rng.standard_normal(tk.size)
@@ -153,7 +153,7 @@ def gm_stamps(imu_t, gyro, enc_t, enc_angle, stand, rng, sigma, tau):
 
 
 def label(key: str) -> str:
-    """The catalogue effect a shape key ``LABEL[:FORM]`` is scored as."""
+    """Return the catalogue effect a shape key ``LABEL[:FORM]`` is scored as."""
     return key.partition(':')[0]
 
 

@@ -77,8 +77,8 @@ def test_a_fifteen_minute_run_is_analysed_whole_by_default(tmp_path):
     ('time_delay_lag', ('time_delay', {'delay_s': 4e-3}), ('residual_psd', 'increment_acf')),
     ('timestamp_jitter_tau', ('timestamp_jitter', {'sigma_s': 1e-4, 'stream': 2.0}),
      ('increment_acf', 'rate_locked'))])
-def test_the_lag_and_the_correlation_time_are_told_from_the_plain_forms(problem, name, plain,
-                                                                       blocks):
+def test_the_lag_and_the_correlation_time_are_told_from_the_plain_forms(
+        problem, name, plain, blocks):
     # Same delay / same stamp variance: what tells the new form apart is its noise part (the
     # lag's colouring, the stamp error's correlation), in the simulator's twins and in the
     # pseudo-twins alike, in the same direction.

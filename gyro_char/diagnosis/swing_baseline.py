@@ -42,14 +42,15 @@ class SwingBaseline:
         units = {'period_s': 's', 'amplitude': 'rad', 'peak_rate': 'rad/s',
                  'scale_factor_error': '1', 'record_scale_factor_error': '1',
                  'record_scale_factor_sigma': '1', 'bias': 'rad/s', 'drift': 'rad/s^2',
-                 'N': 'rad/s^0.5', 'B': 'rad/s', 'K': 'rad/s^1.5', 'encoder_sigma': 'rad', 'lsb': 'rad/s', 'dt': 's',
+                 'N': 'rad/s^0.5', 'B': 'rad/s', 'K': 'rad/s^1.5', 'encoder_sigma': 'rad',
+                 'lsb': 'rad/s', 'dt': 's',
                  'encoder_dt': 's', 'duration': 's'}
         return {k: {'value': float(getattr(self, k)), 'unit': u} for k, u in units.items()}
 
 
 def static_noise(channel: str, preset: str = PRESET) -> dict:
     """
-    The gyro's bias instability B and rate random walk K for the twin: the preset's.
+    Return the gyro's bias instability B and rate random walk K for the twin: the preset's.
 
     The paper's swing model has white noise only, and a swing record cannot pin B and K: the
     residual fit takes out a bias and a drift, and what is left of a flicker and a random walk

@@ -144,7 +144,7 @@ class EffectParts:
         return self.cache[key]
 
     def _colour(self, i: int, k: int) -> dict:
-        """Quadratic parts of R(H n) minus those of R(n) at grid lag k (module doc)."""
+        """Return the quadratic parts of R(H n) minus those of R(n) at grid lag k (module doc)."""
         key = (i, f'unit lag {k}')
         if key not in self.cache:
             lag = float(self._lag_grid(i)[k])
@@ -155,7 +155,7 @@ class EffectParts:
         return self.cache[key]
 
     def _lag(self, i: int, lag: float) -> dict:
-        """The lag's noise colouring: grid parts interpolated in log lag, ∝ lag² below."""
+        """Return the lag's noise colouring: grid parts interpolated in log lag, ∝ lag² below."""
         grid = self._lag_grid(i)
         if lag <= grid[0]:
             lo = self._colour(i, 0)
