@@ -21,7 +21,7 @@ from typing import Optional, Sequence, Tuple
 
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.swing_baseline import PRESET, static_noise, SwingBaseline
-from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
+from gyro_char.diagnosis.swing_expect import EffectParts, lag_gain, pseudo_twin
 from gyro_char.diagnosis.swing_obs import (
     layout, raw_parts, residuals, swing_observables, UNITS)
 from gyro_char.diagnosis.swing_spaces import signs, swing_spaces
@@ -113,9 +113,15 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
 
     A stamp delay candidate starts the gyro's instants that much earlier, so that its stamps
     fall where the record's do (``stamp_offset`` measured them delay included); a gyro lag
-    (``lag_s``) leaves the stamps alone.
+    (``lag_s``) leaves the stamps alone and restores the noise the N calibration took for
+    the lag's (``swing_expect.lag_gain``).
     """
     cfg = twin_config(base)
+    ch = f'gyro_{base.axis}'
+    for n, p in effects:
+        if n == 'time_delay':
+            cfg.noise[ch]['N'] *= np.sqrt(lag_gain(float(p.get('lag_s', 0.0)), base.dt,
+                                                   base.period_s))
     cfg.gyro.start_s -= sum(float(p.get('delay_s', 0.0)) - float(p.get('lag_s', 0.0))
                             for n, p in effects if n == 'time_delay')
     run = simulator.simulate_swing(cfg, duration=base.duration,

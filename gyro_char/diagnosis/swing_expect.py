@@ -33,7 +33,7 @@ from dataclasses import replace
 from typing import Callable, Dict, List, Sequence, Tuple
 
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_obs import finish, raw_parts, residuals
+from gyro_char.diagnosis.swing_obs import finish, layout, raw_parts, residuals
 from gyro_char.records import ENCODER_CHANNEL
 from gyro_char.sim import simulator
 from gyro_char.sim.chain import JITTER_CLIP
@@ -46,7 +46,7 @@ LINEAR = ('harm', 'scale')
 QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'acf')
 NOISE_SPAN_S = 240.0    # span of the jitter's runs (at most the record)
 JITTER_GRID = 8         # stamp errors run, log-spaced from 0.2 % to 45 % of the intervals
-LAG_GRID = (0.05, 20.0, 12)     # gyro lags run: from, to (gyro sample intervals), count
+LAG_GRID = (0.05, 20.0, 16)     # gyro lags run: from, to (gyro sample intervals), count
 
 
 def clean_config(cfg: BenchConfig) -> BenchConfig:
@@ -67,6 +67,23 @@ def clean_config(cfg: BenchConfig) -> BenchConfig:
 def noise_config(cfg: BenchConfig) -> BenchConfig:
     """``clean_config`` with the gyro's noise terms kept: the motion and the gyro noise."""
     return replace(clean_config(cfg), noise=cfg.noise)
+
+
+def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
+    """
+    Return the gyro noise power a lag candidate's twin restores: 1 / median |H|² over the PSD bins.
+
+    The baseline's N is pinned on the record's residual PSD by the median bin ratio against a
+    WHITE twin (``swing.calibrate_n``); a record whose gyro has the one-pole H reads N² times
+    that median of |H|², so a twin that applies H must start from N² over it (measured: a
+    5 ms lag left the twins' low PSD bins 17 % short without this).
+    """
+    if not lag_s:
+        return 1.0
+    a = lag_s / (lag_s + dt)
+    f = np.sqrt(np.prod(layout(0, dt, period_s)['residual_psd'], axis=1))
+    h2 = (1 - a) ** 2 / (1 - 2 * a * np.cos(2 * np.pi * f * dt) + a * a)
+    return float(1.0 / np.median(h2))
 
 
 def span(base: SwingBaseline) -> float:
@@ -144,29 +161,36 @@ class EffectParts:
         return self.cache[key]
 
     def _colour(self, i: int, k: int) -> dict:
-        """Return the quadratic parts of R(H n) minus those of R(n) at grid lag k (module doc)."""
+        """Return the quadratic parts of R(H n) g minus those of R(n) at grid lag k (``lag_gain``)."""
         key = (i, f'unit lag {k}')
         if key not in self.cache:
-            lag = float(self._lag_grid(i)[k])
+            lag, b = float(self._lag_grid(i)[k]), self.bases[i]
+            g = lag_gain(lag, b.dt, b.period_s)
             out = [self._noise_alone(i, []), self._noise_alone(i, [{
                 'name': 'time_delay', 'params': {'delay_s': lag, 'lag_s': lag}}])]
-            part = {q: out[1][q] - out[0][q] for q in QUADRATIC}
-            self.cache[key] = self._as_noise(i, {**out[0], **part}, NOISE_SPAN_S)
+            part = {q: g * out[1][q] - out[0][q] for q in QUADRATIC}
+            floor = {q: g * out[1][q] / np.maximum(out[0][q], 1e-300)
+                     for q in ('psd', 'mean2')}
+            self.cache[key] = {**self._as_noise(i, {**out[0], **part}, NOISE_SPAN_S),
+                               'floor': floor}
         return self.cache[key]
 
     def _lag(self, i: int, lag: float) -> dict:
         """Return the lag's noise colouring: grid parts interpolated in log lag, ∝ lag² below."""
         grid = self._lag_grid(i)
         if lag <= grid[0]:
-            lo = self._colour(i, 0)
-            return {q: (v * (lag / grid[0]) ** 2 if q in QUADRATIC else v)
-                    for q, v in lo.items()}
+            lo, s = self._colour(i, 0), (lag / grid[0]) ** 2
+            out = {q: (v * s if q in QUADRATIC else v) for q, v in lo.items()}
+            out['floor'] = {q: 1.0 - s * (1.0 - r) for q, r in lo['floor'].items()}
+            return out
         x = np.log(min(lag, grid[-1]))
         k = int(np.clip(np.searchsorted(np.log(grid), x) - 1, 0, grid.size - 2))
         f = (x - np.log(grid[k])) / (np.log(grid[k + 1]) - np.log(grid[k]))
         lo, hi = self._colour(i, k), self._colour(i, k + 1)
-        return {q: ((1 - f) * lo[q] + f * hi[q] if q in QUADRATIC else v)
-                for q, v in lo.items()}
+        out = {q: ((1 - f) * lo[q] + f * hi[q] if q in QUADRATIC else v)
+               for q, v in lo.items()}
+        out['floor'] = {q: (1 - f) * lo['floor'][q] + f * hi['floor'][q] for q in lo['floor']}
+        return out
 
     def _grid(self, i: int, stream: float) -> np.ndarray:
         b = self.bases[i]
@@ -216,16 +240,18 @@ def combine(noise: dict, parts: Sequence[dict]) -> dict:
     Return a pseudo-twin's raw parts: its noise twin's plus the effect parts (module doc).
 
     Line peaks: a deterministic part is a line, its squared peak adds; a noise part raises
-    the band's noise, whose largest peak scales with the band's mean power.
+    the band's noise, whose largest peak scales with the band's mean power. A colouring
+    (``floor``: its power ratio on the gyro noise alone) removes at most that share of
+    this twin's power, however large its one-realisation estimate.
     """
     out = dict(noise)
     for p in parts:
+        new = {k: out[k] + p[k] for k in LINEAR + QUADRATIC}
+        for k, ratio in p.get('floor', {}).items():
+            new[k] = np.maximum(new[k], out[k] * ratio)
         if p.get('noise'):
-            out['line2'] = out['line2'] * (out['mean2'] + p['mean2']) / np.maximum(
-                out['mean2'], 1e-300)
-        for k in LINEAR + QUADRATIC:
-            if not (p.get('noise') and k == 'line2'):
-                out[k] = out[k] + p[k]
+            new['line2'] = out['line2'] * new['mean2'] / np.maximum(out['mean2'], 1e-300)
+        out.update(new)
     return out
 
 
