@@ -27,6 +27,14 @@ def one_pole(x: np.ndarray, lag_s: float, dt: float) -> np.ndarray:
     return signal.lfilter(b, den, x, axis=-1, zi=zi)[0]
 
 
+def describe_without(effect: Effect, optional: str) -> dict:
+    """``describe()`` leaving out an optional parameter at its default 0 (earlier truth.json)."""
+    out = Effect.describe(effect)
+    if not out['params'][optional]:
+        del out['params'][optional]
+    return out
+
+
 @register
 class TimeDelay(Effect):
     """IMU late (or early) by a constant relative to the encoder: stamp shift and/or gyro lag."""
@@ -48,6 +56,9 @@ class TimeDelay(Effect):
     def check(self):
         if self.lag_s < 0:
             raise InputError('time_delay: lag_s >= 0')
+
+    def describe(self):
+        return describe_without(self, 'lag_s')
 
     def output(self, ctx, gyro, accel):
         if not self.lag_s:
@@ -78,6 +89,9 @@ class TimestampJitter(Effect):
     def check(self):
         if self.sigma_s < 0 or self.stream not in (0.0, 1.0, 2.0) or self.tau_s < 0:
             raise InputError('timestamp_jitter: sigma_s >= 0, tau_s >= 0 and stream in 0, 1, 2')
+
+    def describe(self):
+        return describe_without(self, 'tau_s')
 
     def _jitter(self, ctx, t, which):
         if self.stream not in (which, 2.0) or not self.sigma_s or t.size < 2:
