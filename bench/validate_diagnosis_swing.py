@@ -24,9 +24,7 @@ catalogue effect name to its shape and three levels ``[weak, strong, edge]``:
   form a = exp(-dt / tau), on the rate values, motion and noise (catalogue: backward Euler);
 - timestamp_jitter:gauss_markov (label timestamp_jitter): a slowly wandering encoder stamp
   error, a first-order Gauss-Markov process driven by uniform innovations (catalogue:
-  Gaussian). (Tried first: drawn every 4 samples and interpolated. Its increments are 4x
-  smaller than a per-sample process of the same sigma and tau, the catalogue's first-order
-  form at the true values made the gap worse, 7.1 -> 10.8, and time_delay was picked.)
+  Gaussian).
 
 A shape key ``LABEL:FORM`` is scored as the catalogue effect LABEL.
 
@@ -55,8 +53,9 @@ Three modes:
 - ``pairs``: two-run cases with two effects at once (delay + saturation, g-sensitivity +
   asymmetry, jitter + cyclic error); success = both found among the selected effects.
 
-``--held-out`` takes the shapes from ``validate_diagnosis_swing_heldout.shapes(rate_hz)`` in
-this directory instead (same interface; written apart from this harness, run once at the end).
+``--held-out [b|c]`` takes the shapes from ``validate_diagnosis_swing_heldout.shapes(rate_hz)``
+(set B; the flag alone) or ``validate_diagnosis_swing_heldout_c`` (set C) in this directory
+instead (same interface; written apart from this harness, run once at the end).
 
 Usage::
 
@@ -182,14 +181,15 @@ def shapes(rate_hz: float) -> dict:
 SHAPES = shapes(RATE_HZ)
 
 
-def held_out_shapes(rate_hz: float) -> dict:
-    """Return the held-out set's ``shapes(rate_hz)``; exit clearly when its file is absent."""
+def held_out_shapes(rate_hz: float, which: str = 'b') -> dict:
+    """Return held-out set ``which``'s ``shapes(rate_hz)``; exit clearly when it is absent."""
     here = Path(__file__).resolve().parent
-    if not (here / f'{HELD_OUT}.py').exists():
-        raise SystemExit(f'--held-out: no {HELD_OUT}.py in {here} (the held-out shapes are '
+    module = HELD_OUT + ('' if which == 'b' else f'_{which}')
+    if not (here / f'{module}.py').exists():
+        raise SystemExit(f'--held-out: no {module}.py in {here} (the held-out shapes are '
                          'written apart from this harness)')
     sys.path.insert(0, str(here))
-    return importlib.import_module(HELD_OUT).shapes(rate_hz)
+    return importlib.import_module(module).shapes(rate_hz)
 
 
 PAIRS = [(('time_delay', 1), ('scale_factor_nonlinearity', 1)),
@@ -257,14 +257,17 @@ def main(argv=None) -> int:
     ap.add_argument('--rate', type=float, default=RATE_HZ, help='gyro rate, Hz (1000)')
     ap.add_argument('--encoder-rate', type=float, default=ENCODER_RATE_HZ,
                     help='encoder rate, Hz (1000)')
-    ap.add_argument('--held-out', action='store_true',
-                    help=f"the shapes of bench/{HELD_OUT}.py instead of this file's")
+    ap.add_argument('--held-out', nargs='?', const='b', choices=('b', 'c'), default=None,
+                    help=f'a held-out set instead of the shapes here: b (the flag alone) = '
+                         f'bench/{HELD_OUT}.py, c = bench/{HELD_OUT}_c.py')
     args = ap.parse_args(argv)
-    shape_set = held_out_shapes(args.rate) if args.held_out else shapes(args.rate)
+    shape_set = (held_out_shapes(args.rate, args.held_out) if args.held_out
+                 else shapes(args.rate))
     run = {'duration': args.duration, 'rate_hz': args.rate,
            'encoder_rate_hz': args.encoder_rate, 'shape_set': shape_set}
     print(f'runs of {args.duration:g} s, gyro {args.rate:g} Hz, encoder {args.encoder_rate:g} '
-          f'Hz; shapes: {"held-out" if args.held_out else "this harness"}', flush=True)
+          f'Hz; shapes: ' + (f'held-out {args.held_out}' if args.held_out else 'this harness'),
+          flush=True)
     rows, t0 = [], time.time()
     for mode, truth, seed in cases(args.mode, args.quick, args.seeds, shape_set):
         d = run_case(truth, seed, args.repeats, (PERIOD,) if mode == 'single' else TWO_PERIODS,

@@ -33,6 +33,7 @@ from gyro_char.records import IMU_CHANNELS
 from msg_adapters import imu_sample
 from msg_adapters.diagnostics import (
     diagnostic_array, diagnostic_status, ERROR, multiarray, OK)
+from msg_adapters.noise import curve_array, fit_values, record_values
 import numpy as np
 from rclpy.node import Node
 from sensor_msgs.msg import Imu
@@ -40,12 +41,6 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from std_srvs.srv import Trigger
 
 NAME = 'allan_node'
-CURVE_QUANTITIES = ('tau_s', 'adev', 'adev_lo', 'adev_hi')
-# Key suffixes of the SI units of noise.json (docs/design.md), gyro then accel.
-UNIT_KEYS = {
-    'gyro': {'N': 'rad_sqrt_s', 'B': 'rad_s', 'K': 'rad_s_sqrt_s', 'Q': 'rad', 'R': 'rad_s2'},
-    'accel': {'N': 'm_s_sqrt_s', 'B': 'm_s2', 'K': 'm_s2_sqrt_s', 'Q': 'm_s', 'R': 'm_s3'},
-}
 
 PARAMS = [
     Param('imu_topic', 'imu/data_raw', 'sensor_msgs/Imu input topic', read_only=True),
@@ -257,11 +252,7 @@ class AllanNode(Node):
 
     def curve_message(self, res) -> Float64MultiArray:
         """Return the curve as (channel, quantity, tau) with self-describing labels."""
-        data = np.stack([np.stack([res.tau, res.adev[:, c], res.adev_lo[:, c],
-                                   res.adev_hi[:, c]]) for c in range(len(res.channels))])
-        return multiarray(Float64MultiArray, MultiArrayDimension, data,
-                          [('channel', list(res.channels)), ('quantity', CURVE_QUANTITIES),
-                           ('tau_index', None)])
+        return multiarray(Float64MultiArray, MultiArrayDimension, *curve_array(res))
 
     def fit(self, res) -> Dict[str, Any]:
         """Fit every channel (``allan.fit.fit_result``); a failing channel is reported."""
@@ -302,30 +293,18 @@ class AllanNode(Node):
     def noise_message(self, res, fitted: Dict[str, Any]) -> DiagnosticArray:
         """Return one status per channel: N, B, K, Q, R (SI in the keys) with intervals."""
         statuses = []
-        duration = res.n_samples * res.dt
         for name in res.channels:
-            values: Dict[str, Any] = {'samples': res.n_samples, 'duration_s': duration,
-                                      'tau_max_s': float(res.tau[-1])}
-            fit = fitted['fits'].get(name)
+            values, fit = record_values(res), fitted['fits'].get(name)
             if fit is None:
-                statuses.append(diagnostic_status(
-                    DiagnosticStatus, KeyValue, status_name(self, f'noise {name}'), ERROR,
-                    'fit failed: ' + fitted['failed'].get(name, '?'), self.hardware_id,
-                    values))
-                continue
-            units = UNIT_KEYS[fit.kind]
-            for term in ('N', 'B', 'K', 'Q', 'R'):
-                est = fit.terms[term]
-                key = f'{term}_{units[term]}'
-                values[key] = est.value
-                lo, hi = est.ci68 if est.ci68 is not None else (math.nan, math.nan)
-                values[f'{term}_lo_{units[term]}'] = lo
-                values[f'{term}_hi_{units[term]}'] = hi
-                values[f'{term}_resolved'] = bool(est.resolved)
+                level, message = ERROR, 'fit failed: ' + fitted['failed'].get(name, '?')
+            else:
+                values.update(fit_values(fit))
+                level, message = OK, (f'{fit.method} fit on {res.n_samples} samples '
+                                      f'({values["duration_s"]:.6g} s); unresolved terms are '
+                                      'upper bounds')
             statuses.append(diagnostic_status(
-                DiagnosticStatus, KeyValue, status_name(self, f'noise {name}'), OK,
-                f'{fit.method} fit on {res.n_samples} samples ({duration:.6g} s); unresolved '
-                'terms are upper bounds', self.hardware_id, values))
+                DiagnosticStatus, KeyValue, status_name(self, f'noise {name}'), level, message,
+                self.hardware_id, values))
         return diagnostic_array(DiagnosticArray, self.get_clock().now().to_msg(), statuses)
 
     def _fit_and_publish(self, res) -> None:
