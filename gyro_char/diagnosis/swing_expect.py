@@ -71,7 +71,7 @@ def noise_config(cfg: BenchConfig) -> BenchConfig:
 
 def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
     """
-    Return the gyro noise power a lag candidate's twin restores: 1 / median |H|² over the PSD bins.
+    Return the gyro noise power a lag candidate's twin restores: 1 / median |H|² of the bins.
 
     The baseline's N is pinned on the record's residual PSD by the median bin ratio against a
     WHITE twin (``swing.calibrate_n``); a record whose gyro has the one-pole H reads N² times
@@ -161,7 +161,7 @@ class EffectParts:
         return self.cache[key]
 
     def _colour(self, i: int, k: int) -> dict:
-        """Return the quadratic parts of R(H n) g minus those of R(n) at grid lag k (``lag_gain``)."""
+        """Return g parts(R(H n)) minus parts(R(n)) at grid lag k (``lag_gain``)."""
         key = (i, f'unit lag {k}')
         if key not in self.cache:
             lag, b = float(self._lag_grid(i)[k]), self.bases[i]
