@@ -4,7 +4,9 @@ The swing kind of the diagnosis: baseline fit, simulated twins, the problem for 
 Baseline = the paper's swing model fitted to the record(s): the 5-state Kalman estimates
 (``swing.filter.estimate_swing``: scale-factor error, bias, drift, the gyro's white noise N and the
 encoder's angle noise) put into the bench simulator (``simulator.simulate_swing``) with each
-record's amplitude, period, rates and output step. Everything else is for the effects.
+record's amplitude, period, rates and output step, plus the gyro's bias instability and rate
+random walk, which a swing record cannot pin (``swing_baseline.static_noise``). Everything else
+is for the effects.
 Observables: ``gyro_char.diagnosis.swing_obs``; candidate effects' search spaces:
 ``gyro_char.diagnosis.swing_spaces``.
 
