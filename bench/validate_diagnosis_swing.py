@@ -19,7 +19,14 @@ catalogue effect name to its shape and three levels ``[weak, strong, edge]``:
   stamp errors are not used: the residual is blind to them to first order (the integrated
   angle and the encoder read at the same wrong stamp are off by the same rate x error);
 - encoder_cyclic_error: a first + third harmonic error on 1000 lines per turn (catalogue:
-  first + second harmonic on 2048 lines).
+  first + second harmonic on 2048 lines);
+- time_delay:one_pole (label time_delay): a gyro-side one-pole IIR low-pass, exponential
+  form a = exp(-dt / tau), on the rate values, motion and noise (catalogue: backward Euler);
+- timestamp_jitter:gauss_markov (label timestamp_jitter): a slowly wandering encoder stamp
+  error, a first-order Gauss-Markov process driven by uniform innovations (catalogue:
+  Gaussian).
+
+A shape key ``LABEL:FORM`` is scored as the catalogue effect LABEL.
 
 The EDGE level is where the effect starts to show on a 15-minute 1 kHz run at the 5 s period
 (20° amplitude, peak rate A ω = 0.44 rad/s, gyro white noise N = 5.5e-4 rad/s/√Hz): about 6
@@ -68,6 +75,7 @@ from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 import numpy as np
+from scipy import signal
 
 RATE_HZ = 1000.0
 ENCODER_RATE_HZ = 1000.0
@@ -126,6 +134,29 @@ def cyclic_13(imu_t, gyro, enc_t, enc_angle, stand, rng, a1, a3):
     return imu_t, gyro, enc_t, e
 
 
+def one_pole_iir(imu_t, gyro, enc_t, enc_angle, stand, rng, tau):
+    """Low-pass the rate values by a one-pole IIR of time constant ``tau`` (exponential form)."""
+    dt = float(np.median(np.diff(imu_t)))
+    a = float(np.exp(-dt / tau))
+    y = signal.lfilter([1.0 - a], [1.0, -a], gyro, zi=[a * gyro[0]])[0]
+    return imu_t, y, enc_t, enc_angle
+
+
+def gm_stamps(imu_t, gyro, enc_t, enc_angle, stand, rng, sigma, tau):
+    """Move the encoder stamps by a Gauss-Markov error (``sigma``, ``tau``), uniform drive."""
+    phi = float(np.exp(-float(np.median(np.diff(enc_t))) / tau))
+    w = rng.uniform(-np.sqrt(3.0), np.sqrt(3.0), enc_t.size)
+    w[1:] *= np.sqrt(1.0 - phi * phi)
+    e = sigma * signal.lfilter([1.0], [1.0, -phi], w)
+    lim = 0.45 * float(np.median(np.diff(enc_t)))
+    return imu_t, gyro, enc_t + np.clip(e, -lim, lim), enc_angle
+
+
+def label(key: str) -> str:
+    """Return the catalogue effect a shape key ``LABEL[:FORM]`` is scored as."""
+    return key.partition(':')[0]
+
+
 def shapes(rate_hz: float) -> dict:
     """Shape and levels ``[weak, strong, edge]`` per catalogue effect name (module doc)."""
     return {
@@ -139,6 +170,11 @@ def shapes(rate_hz: float) -> dict:
                                               {'half_width': 1.2e-5}]),
         'encoder_cyclic_error': (cyclic_13, [{'a1': 5e-5, 'a3': 2e-5}, {'a1': 2e-4, 'a3': 5e-5},
                                              {'a1': 1e-6, 'a3': 4e-7}]),
+        'time_delay:one_pole': (one_pole_iir, [{'tau': 1.6e-3}, {'tau': 5e-3},
+                                               {'tau': 8e-4}]),
+        'timestamp_jitter:gauss_markov': (gm_stamps, [
+            {'sigma': 6e-5, 'tau': 0.03}, {'sigma': 2e-4, 'tau': 0.05},
+            {'sigma': 3e-5, 'tau': 0.02}]),
     }
 
 
@@ -237,7 +273,7 @@ def main(argv=None) -> int:
         d = run_case(truth, seed, args.repeats, (PERIOD,) if mode == 'single' else TWO_PERIODS,
                      **run)
         amb = sorted({n for a in d.ambiguous for n in a['effects']})
-        rows.append({'mode': mode, 'truth': [n for n, _ in truth],
+        rows.append({'mode': mode, 'truth': [label(n) for n, _ in truth],
                      'label': '+'.join(f'{n}/{level_name(lv)}' for n, lv in truth) or 'clean',
                      'level': [level_name(lv) for _, lv in truth],
                      'seed': seed, 'detected': d.baseline_gap > d.null_gap['q95'],
@@ -249,7 +285,8 @@ def main(argv=None) -> int:
               f'{d.selected_effects} ambiguous {amb} [{time.time() - t0:.0f} s]', flush=True)
     for mode in ('single', 'two', 'pairs'):
         if any(r['mode'] == mode for r in rows):
-            report(mode, [r for r in rows if r['mode'] == mode], list(shape_set))
+            report(mode, [r for r in rows if r['mode'] == mode],
+                   list(dict.fromkeys(label(k) for k in shape_set)))
     return 0
 
 
@@ -296,7 +333,7 @@ def report(mode, rows, names=None):
 
 def confusion(det, names=None):
     """Truth (rows) against the first selected effect (columns), detected cases."""
-    names = list(SHAPES) if names is None else names
+    names = list(dict.fromkeys(label(k) for k in SHAPES)) if names is None else names
     cols = names + ['none']
     short = {c: ''.join(w[0] for w in c.split('_')) for c in cols}
     print('  truth \\ first selected    ' + ' '.join(f'{short[c]:>5s}' for c in cols))

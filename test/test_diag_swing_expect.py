@@ -14,11 +14,16 @@ CASES = {
     'g_sensitivity': ([('g_sensitivity', {'gy': 2e-3})], 'quadrature'),
     'scale_factor_nonlinearity': ([('scale_factor_nonlinearity', {'k2': 5e-2, 'k3': 1e-1})],
                                   'harmonic_3f'),
-    'scale_factor_asymmetry': ([('scale_factor_asymmetry', {'a': 3e-3})], 'harmonic_2f'),
+    'scale_factor_asymmetry': ([('scale_factor_asymmetry', {'a': 4e-3})], 'harmonic_2f'),
     'encoder_cyclic_error': ([('encoder_cyclic_error', {'a1': 3e-5, 'a2': 0.0,
                                                         'lines': 1000.0})], 'encoder_lines'),
     'timestamp_jitter': ([('timestamp_jitter', {'sigma_s': 1e-4, 'stream': 2.0})],
                          'rate_locked'),
+    # A one-pole gyro filter (the lag colours the noise: shows in the residual PSD) and a
+    # wandering stamp error (Gauss-Markov, 50 ms).
+    'time_delay_lag': ([('time_delay', {'delay_s': 4e-3, 'lag_s': 4e-3})], 'residual_psd'),
+    'timestamp_jitter_tau': ([('timestamp_jitter', {'sigma_s': 1e-4, 'stream': 2.0,
+                                                    'tau_s': 0.05})], 'rate_locked'),
 }
 # rms over a block's elements of (pseudo-twins' mean - twins' mean) / standard error of that
 # difference.
@@ -66,3 +71,22 @@ def test_a_fifteen_minute_run_is_analysed_whole_by_default(tmp_path):
                                                                       'g_sensitivity')
     check = d['posterior_predictive']
     assert check['repeats'] == 3 and check['effects'] == d['selected_effects']
+
+
+@pytest.mark.parametrize('name, plain, blocks', [
+    ('time_delay_lag', ('time_delay', {'delay_s': 4e-3}), ('residual_psd', 'increment_acf')),
+    ('timestamp_jitter_tau', ('timestamp_jitter', {'sigma_s': 1e-4, 'stream': 2.0}),
+     ('increment_acf', 'rate_locked'))])
+def test_the_lag_and_the_correlation_time_are_told_from_the_plain_forms(
+        problem, name, plain, blocks):
+    # Same delay / same stamp variance: what tells the new form apart is its noise part (the
+    # lag's colouring, the stamp error's correlation), in the simulator's twins and in the
+    # pseudo-twins alike, in the same direction.
+    k = 6
+    effects = CASES[name][0]
+    for run in (problem.simulate, problem.twin):
+        new = diag_gap.sim_stats([run(0, effects, 300 + s) for s in range(k)])
+        old = diag_gap.sim_stats([run(0, [plain], 300 + s) for s in range(k)])
+        for b in blocks:
+            z = (new.mean[b] - old.mean[b]) / np.maximum(old.std[b], 1e-12)
+            assert np.max(np.abs(z)) > 5.0, (run, b, z)

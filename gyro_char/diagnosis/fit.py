@@ -43,6 +43,10 @@ class Param:
     sign: float = 1.0
     choice: bool = False
     off_at_hi: bool = False
+    # Where the search starts (default: the middle of the range); unlike ``EffectSpace.start``
+    # still searched. An optional refinement (a gyro lag, a stamp error's correlation time)
+    # starts at the end where it is absent, so the main parameter is fitted as without it.
+    init: Optional[float] = None
 
     def is_off(self, value: float) -> bool:
         """Return True if ``value`` is this parameter's "absent" value (``off_at_hi``)."""
@@ -104,6 +108,15 @@ def _to_u(p: Param, v: float) -> float:
     return float(np.log(v)) if p.log else float(v)
 
 
+def _start_value(p: Param) -> float:
+    """Where the search of ``p`` starts: ``init``, 0 if absent at ``hi``, else mid-range."""
+    if p.init is not None:
+        return p.init
+    if p.off_at_hi:
+        return 0.0
+    return _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi)))
+
+
 def _from_u(p: Param, u: float) -> float:
     if p.off_at_hi and u >= _to_u(p, p.hi) - 1e-12:
         return 0.0
@@ -137,9 +150,7 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
                            grid=grid, refine=refine, passes=passes, near=near, at=at)
                 for v in values]
         return min(fits, key=lambda f: f[1].gap)
-    values = {p.name: space.start.get(p.name, 0.0 if p.off_at_hi else
-                                      _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi))))
-              for p in space.params}
+    values = {p.name: space.start.get(p.name, _start_value(p)) for p in space.params}
     if not near:   # a refit near an earlier fit keeps to the caller's passes
         passes = max(passes, space.passes)
     if near:

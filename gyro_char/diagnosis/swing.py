@@ -4,7 +4,9 @@ The swing kind of the diagnosis: baseline fit, simulated twins, the problem for 
 Baseline = the paper's swing model fitted to the record(s): the 5-state Kalman estimates
 (``swing.filter.estimate_swing``: scale-factor error, bias, drift, the gyro's white noise N and the
 encoder's angle noise) put into the bench simulator (``simulator.simulate_swing``) with each
-record's amplitude, period, rates and output step. Everything else is for the effects.
+record's amplitude, period, rates and output step, plus the gyro's bias instability and rate
+random walk, which a swing record cannot pin (``swing_baseline.static_noise``). Everything else
+is for the effects.
 Observables: ``gyro_char.diagnosis.swing_obs``; candidate effects' search spaces:
 ``gyro_char.diagnosis.swing_spaces``.
 
@@ -20,8 +22,8 @@ from dataclasses import replace
 from typing import Optional, Sequence, Tuple
 
 from gyro_char.diagnosis.engine import Problem
-from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
+from gyro_char.diagnosis.swing_baseline import PRESET, static_noise, SwingBaseline
+from gyro_char.diagnosis.swing_expect import EffectParts, lag_gain, pseudo_twin
 from gyro_char.diagnosis.swing_obs import (
     layout, raw_parts, residuals, swing_observables, UNITS)
 from gyro_char.diagnosis.swing_spaces import signs, swing_spaces
@@ -36,7 +38,6 @@ import numpy as np
 
 SWING_EFFECTS = ('time_delay', 'g_sensitivity', 'scale_factor_nonlinearity',
                  'scale_factor_asymmetry', 'encoder_cyclic_error', 'timestamp_jitter')
-PRESET = 'adis16405'  # structure only: the fitted numbers override what matters
 
 
 def fit_baseline(imu: Recording, encoder: Recording, period_s: float,
@@ -60,7 +61,8 @@ def fit_baseline(imu: Recording, encoder: Recording, period_s: float,
         encoder_sigma=float(est.noise_encoder_rad), lsb=lsb, dt=dt,
         encoder_dt=float((al.tau_encoder[-1] - al.tau_encoder[0]) / (al.tau_encoder.size - 1)),
         duration=float(min(al.tau_gyro[-1], al.tau_encoder[-1])) + dt,
-        axis=al.axis.replace('gyro_', ''), gyro_start=stamp_offset(imu.t, encoder.t))
+        axis=al.axis.replace('gyro_', ''), gyro_start=stamp_offset(imu.t, encoder.t),
+        **static_noise(al.axis))
 
 
 def stamp_offset(t_g: np.ndarray, t_e: np.ndarray, count: int = 4096) -> float:
@@ -100,7 +102,7 @@ def twin_config(base: SwingBaseline) -> BenchConfig:
                  'quantizer': 'round', 'misalignment': 0.0,
                  'scale_factor_error': {a: base.scale_factor_error},
                  'bias': {a: base.bias}, 'bias_drift': {a: base.drift}},
-        'noise': {ch: {'N': base.N, 'B': 0.0, 'K': 0.0, 'Q': 0.0, 'R': 0.0}},
+        'noise': {ch: {'N': base.N, 'B': base.B, 'K': base.K, 'Q': 0.0, 'R': 0.0}},
     })
     cfg.encoder.adc_noise = encoder_white_sigma(base, cfg)
     cfg.gyro.start_s = base.gyro_start
@@ -112,11 +114,18 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
     IMU and encoder recordings of a twin: the baseline plus ``effects``.
 
     A stamp delay candidate starts the gyro's instants that much earlier, so that its stamps
-    fall where the record's do (``stamp_offset`` measured them delay included).
+    fall where the record's do (``stamp_offset`` measured them delay included); a gyro lag
+    (``lag_s``) leaves the stamps alone and restores the noise the N calibration took for
+    the lag's (``swing_expect.lag_gain``).
     """
     cfg = twin_config(base)
-    cfg.gyro.start_s -= sum(float(p.get('delay_s', 0.0)) for n, p in effects
-                            if n == 'time_delay')
+    ch = f'gyro_{base.axis}'
+    for n, p in effects:
+        if n == 'time_delay':
+            cfg.noise[ch]['N'] *= np.sqrt(lag_gain(float(p.get('lag_s', 0.0)), base.dt,
+                                                   base.period_s))
+    cfg.gyro.start_s -= sum(float(p.get('delay_s', 0.0)) - float(p.get('lag_s', 0.0))
+                            for n, p in effects if n == 'time_delay')
     run = simulator.simulate_swing(cfg, duration=base.duration,
                                    seed=int(seed), effects=twin_effects(effects),
                                    channels=(f'gyro_{base.axis}',))

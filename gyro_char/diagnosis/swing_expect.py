@@ -18,7 +18,14 @@ numbers across candidates). D's come from a NOISE-FREE simulation of the baselin
 without the effect, differenced sample by sample; the stand motion is periodic, so D is
 computed on a whole number of swing periods (``SPAN_S``) instead of the whole record. For a
 noise effect (jitter) the linear parts of D are dropped (zero mean) and its quadratic parts come
-from runs on a grid of stamp errors (``EffectParts._jitter``). What this leaves out:
+from runs on a grid of stamp errors (``EffectParts._jitter``); a correlated jitter
+(``tau_s``) the same, its grid run at that correlation time. A noise part's squared line
+peaks and band means are scaled from its run's span to the record's (a noise's line
+amplitude falls as one over the root of the passes). A gyro lag (``time_delay``'s
+``lag_s``) is linear too: its motion part is a deterministic D as above, and it also
+colours the baseline's gyro noise, whose quadratic parts then change by those of R(H n) minus
+those of R(n) (R: the residual, H: the lag, n: the twin's gyro noise, N B K, alone), from a
+noise-only run on a grid of lags (``EffectParts._lag``). What this leaves out:
 the cross terms' extra spread (the pseudo-twins' spread is the baseline's) and the effects'
 interaction with quantization; ``--check`` simulates the selected model's twins in full.
 """
@@ -26,7 +33,7 @@ from dataclasses import replace
 from typing import Callable, Dict, List, Sequence, Tuple
 
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_obs import finish, raw_parts, residuals
+from gyro_char.diagnosis.swing_obs import finish, layout, raw_parts, residuals
 from gyro_char.records import ENCODER_CHANNEL
 from gyro_char.sim import simulator
 from gyro_char.sim.chain import JITTER_CLIP
@@ -39,6 +46,7 @@ LINEAR = ('harm', 'scale')
 QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'acf')
 NOISE_SPAN_S = 240.0    # span of the jitter's runs (at most the record)
 JITTER_GRID = 8         # stamp errors run, log-spaced from 0.2 % to 45 % of the intervals
+LAG_GRID = (0.05, 20.0, 16)     # gyro lags run: from, to (gyro sample intervals), count
 
 
 def clean_config(cfg: BenchConfig) -> BenchConfig:
@@ -54,6 +62,28 @@ def clean_config(cfg: BenchConfig) -> BenchConfig:
     st = replace(cfg.stand, amplitude_noise=0.0, drift_rate_noise=0.0)
     noise = {ch: dict.fromkeys(v, 0.0) for ch, v in cfg.noise.items()}
     return replace(cfg, gyro=g, encoder=e, stand=st, noise=noise)
+
+
+def noise_config(cfg: BenchConfig) -> BenchConfig:
+    """``clean_config`` with the gyro's noise terms kept: the motion and the gyro noise."""
+    return replace(clean_config(cfg), noise=cfg.noise)
+
+
+def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
+    """
+    Return the gyro noise power a lag candidate's twin restores: 1 / median |H|² of the bins.
+
+    The baseline's N is pinned on the record's residual PSD by the median bin ratio against a
+    WHITE twin (``swing.calibrate_n``); a record whose gyro has the one-pole H reads N² times
+    that median of |H|², so a twin that applies H must start from N² over it (measured: a
+    5 ms lag left the twins' low PSD bins 17 % short without this).
+    """
+    if not lag_s:
+        return 1.0
+    a = lag_s / (lag_s + dt)
+    f = np.sqrt(np.prod(layout(0, dt, period_s)['residual_psd'], axis=1))
+    h2 = (1 - a) ** 2 / (1 - 2 * a * np.cos(2 * np.pi * f * dt) + a * a)
+    return float(1.0 / np.median(h2))
 
 
 def span(base: SwingBaseline) -> float:
@@ -77,9 +107,10 @@ class EffectParts:
         self.cache: Dict[Tuple[int, str], dict] = {}
         self.clean: Dict[int, tuple] = {}
 
-    def _run(self, i: int, effects: list, span_s: float = 0.0):
+    def _run(self, i: int, effects: list, span_s: float = 0.0, noisy: bool = False):
         b = self.bases[i]
-        run = simulator.simulate_swing(clean_config(self.config(b)), seed=0,
+        cfg = (noise_config if noisy else clean_config)(self.config(b))
+        run = simulator.simulate_swing(cfg, seed=0,
                                        duration=min(span_s, b.duration) or span(b),
                                        effects=effects, channels=(f'gyro_{b.axis}',))
         res = residuals(run.imu.t, run.imu.channels[f'gyro_{b.axis}'], run.encoder.t,
@@ -95,19 +126,79 @@ class EffectParts:
                 self.clean[(i, span_s)] = self._run(i, [], span_s)
             res0, s0 = self.clean[(i, span_s)]
             res, s = self._run(i, effects, span_s)
-            # Sample by sample: the same sample numbers of both runs (a stamp shift may drop
-            # an edge sample from one of them).
-            cg, ig0, ig = np.intersect1d(res0.idx_g, res.idx_g, return_indices=True)
-            ce, ie0, ie = np.intersect1d(res0.idx_e, res.idx_e, return_indices=True)
-            geo = res0.take(ig0, ie0)
-            part = raw_parts(geo, self.ranges[i], res.r[ig] - geo.r, res.r_e[ie] - geo.r_e)
+            part = self._difference(i, res0, res, cross=not noise)
             part['scale'] = s - s0
             if noise:
-                part['harm'] = np.zeros_like(part['harm'])
-                part['scale'] = 0.0
-                part['noise'] = True
+                part = self._as_noise(i, part, span_s)
             self.cache[key] = part
         return self.cache[key]
+
+    def _difference(self, i: int, res0, res, cross: bool = False) -> dict:
+        # Sample by sample: the same sample numbers of both runs (a stamp shift may drop
+        # an edge sample from one of them). ``cross``: the quadratic parts are those of the
+        # run with the effect minus those without, so they keep the cross term of D with
+        # the motion's own deterministic residual A (interpolation of the gyro angle at the
+        # encoder stamps), which every twin shares: E|A + D + N|^2 - E|A + N|^2.
+        cg, ig0, ig = np.intersect1d(res0.idx_g, res.idx_g, return_indices=True)
+        ce, ie0, ie = np.intersect1d(res0.idx_e, res.idx_e, return_indices=True)
+        geo = res0.take(ig0, ie0)
+        part = raw_parts(geo, self.ranges[i], res.r[ig] - geo.r, res.r_e[ie] - geo.r_e)
+        if cross:
+            with_fx, without = (raw_parts(geo, self.ranges[i], res.r[ig], res.r_e[ie]),
+                                raw_parts(geo, self.ranges[i]))
+            part.update({q: with_fx[q] - without[q] for q in QUADRATIC})
+        return part
+
+    def _as_noise(self, i: int, part: dict, span_s: float) -> dict:
+        # Zero-mean linear parts; a noise's squared line amplitudes scale as 1 / length.
+        b = self.bases[i]
+        ratio = min(span_s or span(b), b.duration) / b.duration
+        return {**part, 'harm': np.zeros_like(part['harm']), 'scale': 0.0, 'noise': True,
+                'line2': part['line2'] * ratio, 'mean2': part['mean2'] * ratio}
+
+    def _lag_grid(self, i: int) -> np.ndarray:
+        lo, hi, n = LAG_GRID
+        return np.geomspace(lo * self.bases[i].dt, hi * self.bases[i].dt, n)
+
+    def _noise_alone(self, i: int, fx: list) -> dict:
+        # Raw parts of the gyro noise's residual alone under ``fx``: noisy minus clean run.
+        key = (i, 'unit noise ' + repr(fx))
+        if key not in self.cache:
+            runs = [self._run(i, fx, NOISE_SPAN_S, noisy)[0] for noisy in (False, True)]
+            self.cache[key] = self._difference(i, *runs)
+        return self.cache[key]
+
+    def _colour(self, i: int, k: int) -> dict:
+        """Return g parts(R(H n)) minus parts(R(n)) at grid lag k (``lag_gain``)."""
+        key = (i, f'unit lag {k}')
+        if key not in self.cache:
+            lag, b = float(self._lag_grid(i)[k]), self.bases[i]
+            g = lag_gain(lag, b.dt, b.period_s)
+            out = [self._noise_alone(i, []), self._noise_alone(i, [{
+                'name': 'time_delay', 'params': {'delay_s': lag, 'lag_s': lag}}])]
+            part = {q: g * out[1][q] - out[0][q] for q in QUADRATIC}
+            floor = {q: np.minimum(g * out[1][q] / np.maximum(out[0][q], 1e-300), 1.0)
+                     for q in ('psd', 'mean2')}
+            self.cache[key] = {**self._as_noise(i, {**out[0], **part}, NOISE_SPAN_S),
+                               'floor': floor}
+        return self.cache[key]
+
+    def _lag(self, i: int, lag: float) -> dict:
+        """Return the lag's noise colouring: grid parts interpolated in log lag, ∝ lag² below."""
+        grid = self._lag_grid(i)
+        if lag <= grid[0]:
+            lo, s = self._colour(i, 0), (lag / grid[0]) ** 2
+            out = {q: (v * s if q in QUADRATIC else v) for q, v in lo.items()}
+            out['floor'] = {q: 1.0 - s * (1.0 - r) for q, r in lo['floor'].items()}
+            return out
+        x = np.log(min(lag, grid[-1]))
+        k = int(np.clip(np.searchsorted(np.log(grid), x) - 1, 0, grid.size - 2))
+        f = (x - np.log(grid[k])) / (np.log(grid[k + 1]) - np.log(grid[k]))
+        lo, hi = self._colour(i, k), self._colour(i, k + 1)
+        out = {q: ((1 - f) * lo[q] + f * hi[q] if q in QUADRATIC else v)
+               for q, v in lo.items()}
+        out['floor'] = {q: (1 - f) * lo['floor'][q] + f * hi['floor'][q] for q in lo['floor']}
+        return out
 
     def _grid(self, i: int, stream: float) -> np.ndarray:
         b = self.bases[i]
@@ -115,11 +206,12 @@ class EffectParts:
                                                           b.encoder_dt]
         return np.geomspace(0.002 * min(dts), JITTER_CLIP * max(dts), JITTER_GRID)
 
-    def _unit(self, i: int, stream: float, k: int) -> dict:
+    def _unit(self, i: int, stream: float, k: int, tau: float = 0.0) -> dict:
         # The jitter at grid point k over NOISE_SPAN_S, per unit stamp variance.
         sigma = float(self._grid(i, stream)[k])
+        extra = {'tau_s': tau} if tau else {}
         part = self._single(i, [{'name': 'timestamp_jitter', 'params': {
-            'sigma_s': sigma, 'stream': stream}}], True, span_s=NOISE_SPAN_S)
+            'sigma_s': sigma, 'stream': stream, **extra}}], True, span_s=NOISE_SPAN_S)
         return {q: v / sigma ** 2 if q in QUADRATIC else v for q, v in part.items()}
 
     def _jitter(self, i: int, params: dict) -> dict:
@@ -132,18 +224,21 @@ class EffectParts:
         encoder interval, 120 s at 200 Hz), and the stamp error is clipped at 0.45 interval.
         """
         sigma, stream = float(params['sigma_s']), float(params.get('stream', 2.0))
+        tau = float(params.get('tau_s', 0.0))
         grid = self._grid(i, stream)
         x = float(np.clip(np.log(max(sigma, 1e-30)), np.log(grid[0]), np.log(grid[-1])))
         k = int(np.clip(np.searchsorted(np.log(grid), x) - 1, 0, grid.size - 2))
         f = (x - np.log(grid[k])) / (np.log(grid[k + 1]) - np.log(grid[k]))
-        lo, hi = self._unit(i, stream, k), self._unit(i, stream, k + 1)
+        lo, hi = self._unit(i, stream, k, tau), self._unit(i, stream, k + 1, tau)
         return {q: (sigma ** 2 * ((1 - f) * lo[q] + f * hi[q]) if q in QUADRATIC else lo[q])
                 for q in lo}
 
     def part(self, i: int, effects: list) -> List[dict]:
-        """Return D's raw parts on record ``i``: one for the deterministic effects, one a noise."""
+        """Return D's raw parts on record ``i``: the deterministic effects', then noises'."""
         det = [fx for fx in effects if fx['name'] not in NOISE_EFFECTS]
         out = [self._single(i, det, False)] if det else []
+        out += [self._lag(i, float(fx['params']['lag_s'])) for fx in det
+                if fx['name'] == 'time_delay' and fx['params'].get('lag_s', 0)]
         return out + [self._jitter(i, fx['params']) for fx in effects
                       if fx['name'] == 'timestamp_jitter' and fx['params'].get('sigma_s', 0)]
 
@@ -153,16 +248,18 @@ def combine(noise: dict, parts: Sequence[dict]) -> dict:
     Return a pseudo-twin's raw parts: its noise twin's plus the effect parts (module doc).
 
     Line peaks: a deterministic part is a line, its squared peak adds; a noise part raises
-    the band's noise, whose largest peak scales with the band's mean power.
+    the band's noise, whose largest peak scales with the band's mean power. A colouring
+    (``floor``: its power ratio on the gyro noise alone) removes at most that share of
+    this twin's power, however large its one-realisation estimate.
     """
     out = dict(noise)
     for p in parts:
+        new = {k: out[k] + p[k] for k in LINEAR + QUADRATIC}
+        for k, ratio in p.get('floor', {}).items():
+            new[k] = np.maximum(new[k], out[k] * ratio)
         if p.get('noise'):
-            out['line2'] = out['line2'] * (out['mean2'] + p['mean2']) / np.maximum(
-                out['mean2'], 1e-300)
-        for k in LINEAR + QUADRATIC:
-            if not (p.get('noise') and k == 'line2'):
-                out[k] = out[k] + p[k]
+            new['line2'] = out['line2'] * new['mean2'] / np.maximum(out['mean2'], 1e-300)
+        out.update(new)
     return out
 
 

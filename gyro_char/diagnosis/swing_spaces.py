@@ -9,6 +9,7 @@ from typing import Callable, List, Optional, Sequence
 
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
+from gyro_char.diagnosis.swing_expect import LAG_GRID
 import numpy as np
 
 G0 = 9.80665
@@ -24,7 +25,12 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
     # the same span of quadrature amplitudes, so neither is favoured by its grid.
     q = base.N / w * np.sqrt(2.0 / base.duration)
     return [
-        EffectSpace('time_delay', [Param('delay_s', 0.5 * q / rate, 200.0 * q / rate)]),
+        # The gyro lag part of the delay (a one-pole filter inside the gyro): the motion
+        # sees delay_s whatever the split, the lag alone colours the noise; searched from
+        # its low end (a pure stamp delay), over the pseudo-twins' grid of lags.
+        EffectSpace('time_delay', [Param('delay_s', 0.5 * q / rate, 200.0 * q / rate),
+                                   Param('lag_s', LAG_GRID[0] * base.dt, LAG_GRID[1] * base.dt,
+                                         init=LAG_GRID[0] * base.dt)]),
         EffectSpace('g_sensitivity', [Param('gy', 0.5 * q * w / (G0 * base.amplitude),
                                             200.0 * q * w / (G0 * base.amplitude))]),
         EffectSpace('scale_factor_nonlinearity', [
@@ -41,9 +47,13 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         # angle and the encoder read at the same wrong stamp move together); an encoder
         # stamp error shows as residual angle noise rate x error. Down to 0.2 % of the
         # encoder interval (2 µs at 1 kHz): below the ``rate_locked`` floor of a clean record.
-        EffectSpace('timestamp_jitter', [Param('sigma_s', 0.002 * base.encoder_dt,
-                                               0.4 * base.encoder_dt)],
-                    fixed={'stream': 2.0}),
+        # Correlation time from 0.05 interval (white: phi = e^-20) to a tenth of a period,
+        # searched from the white end: a wandering stamp error's angle error rate x e(t) is
+        # coherent over tau_s, lines in the encoder residual rather than white noise.
+        EffectSpace('timestamp_jitter', [
+            Param('sigma_s', 0.002 * base.encoder_dt, 0.4 * base.encoder_dt),
+            Param('tau_s', 0.05 * base.encoder_dt, 0.1 * base.period_s,
+                  init=0.05 * base.encoder_dt)], fixed={'stream': 2.0}),
     ]
 
 

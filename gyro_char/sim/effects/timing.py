@@ -3,46 +3,95 @@ Timing effects: ``time_delay`` and ``timestamp_jitter`` (stamps differ from samp
 
 The baseline's sampling jitter moves the *sample instants* (values and stamps agree); these
 effects move only the *stamps*, which is what a transport latency or a host-side stamp does.
+``time_delay`` may put part of its latency inside the gyro instead (``lag_s``: a one-pole
+low-pass on the rate values, which also colours the noise); ``timestamp_jitter`` may be
+correlated in time (``tau_s``: a first-order Gauss-Markov stamp error).
 """
 from gyro_char.errors import InputError
 from gyro_char.sim.chain import JITTER_CLIP
 from gyro_char.sim.effects.base import Effect, register
 import numpy as np
+from scipy import signal
+
+
+def one_pole(x: np.ndarray, lag_s: float, dt: float) -> np.ndarray:
+    """
+    First-order lag of time constant ``lag_s`` along the last axis, started in steady state.
+
+    Backward-Euler form y[n] = a y[n-1] + (1 - a) x[n], a = lag / (lag + dt): its group delay
+    at low frequency is exactly ``lag_s`` (the exponential form's is lag - dt / 2 + ...).
+    """
+    a = lag_s / (lag_s + dt)
+    b, den = np.array([1.0 - a]), np.array([1.0, -a])
+    zi = signal.lfilter_zi(b, den) * x[..., :1]
+    return signal.lfilter(b, den, x, axis=-1, zi=zi)[0]
+
+
+def describe_without(effect: Effect, optional: str) -> dict:
+    """``describe()`` leaving out an optional parameter at its default 0 (earlier truth.json)."""
+    out = Effect.describe(effect)
+    if not out['params'][optional]:
+        del out['params'][optional]
+    return out
 
 
 @register
 class TimeDelay(Effect):
-    """IMU stamps late (or early) by a constant relative to the encoder's."""
+    """IMU late (or early) by a constant relative to the encoder: stamp shift and/or gyro lag."""
 
     name = 'time_delay'
-    summary = 'constant latency between the gyro and the encoder stamps'
+    summary = 'constant latency between the gyro and the encoder stamps (optionally a gyro lag)'
     physics = ('Each IMU sample is stamped delay_s after the instant it was taken (transport '
                'and driver latency; negative: the encoder lags instead). Any real value, not '
                'a whole number of samples. On a swing run the gyro angle lags the encoder '
                'angle: residual -delay * phi_dot, in quadrature with the angle, amplitude '
-               'A (2 pi / T) delay.')
-    PARAMS = {'delay_s': (1.0e-3, 's', 'stamp minus sample instant of the IMU samples')}
+               'A (2 pi / T) delay. With lag_s > 0, lag_s of the latency is a first-order '
+               'low-pass inside the gyro (time constant lag_s, backward-Euler form whose '
+               'low-frequency delay is lag_s) on every gyro axis, motion and noise alike '
+               '(it attenuates and colours the noise above 1 / (2 pi lag_s)); the stamps '
+               'then carry the rest, delay_s - lag_s. lag_s = delay_s: a pure gyro filter.')
+    PARAMS = {'delay_s': (1.0e-3, 's', 'total latency: stamp shift plus the lag'),
+              'lag_s': (0.0, 's', 'part of delay_s that is a one-pole gyro lag (>= 0)')}
+
+    def check(self):
+        if self.lag_s < 0:
+            raise InputError('time_delay: lag_s >= 0')
+
+    def describe(self):
+        return describe_without(self, 'lag_s')
+
+    def output(self, ctx, gyro, accel):
+        if not self.lag_s:
+            return gyro, accel
+        return one_pole(gyro, self.lag_s, ctx.dt), accel
 
     def stamps(self, ctx, t):
-        return t + self.delay_s
+        return t + (self.delay_s - self.lag_s)
 
 
 @register
 class TimestampJitter(Effect):
-    """White Gaussian error on the stamps beyond the baseline sampling jitter."""
+    """Gaussian error on the stamps beyond the baseline sampling jitter: white or correlated."""
 
     name = 'timestamp_jitter'
     summary = 'random stamp errors (host-side stamping) on IMU and/or encoder'
-    physics = ('stamp = sample instant + e, e white Gaussian (sigma_s), clipped at 0.45 of '
+    physics = ('stamp = sample instant + e, e Gaussian (sigma_s), clipped at 0.45 of '
                'the sample interval so that stamps stay increasing. The values are unchanged, '
                'so a stream read at its stamps is off by phi_dot * e: on a swing run an extra '
-               'angle noise of variance (A 2 pi / T)^2 sigma^2 / 2.')
+               'angle noise of variance (A 2 pi / T)^2 sigma^2 / 2. tau_s = 0: e white; '
+               'tau_s > 0: a stationary first-order Gauss-Markov process of correlation time '
+               'tau_s (a slowly wandering stamp error: its angle error is coherent over '
+               'tau_s and shows as lines in the encoder residual).')
     PARAMS = {'sigma_s': (50.0e-6, 's', 'standard deviation of the stamp error'),
-              'stream': (2.0, '-', '0: IMU, 1: encoder, 2: both')}
+              'stream': (2.0, '-', '0: IMU, 1: encoder, 2: both'),
+              'tau_s': (0.0, 's', 'correlation time of the stamp error (0: white)')}
 
     def check(self):
-        if self.sigma_s < 0 or self.stream not in (0.0, 1.0, 2.0):
-            raise InputError('timestamp_jitter: sigma_s >= 0 and stream in 0, 1, 2')
+        if self.sigma_s < 0 or self.stream not in (0.0, 1.0, 2.0) or self.tau_s < 0:
+            raise InputError('timestamp_jitter: sigma_s >= 0, tau_s >= 0 and stream in 0, 1, 2')
+
+    def describe(self):
+        return describe_without(self, 'tau_s')
 
     def _jitter(self, ctx, t, which):
         if self.stream not in (which, 2.0) or not self.sigma_s or t.size < 2:
@@ -50,6 +99,11 @@ class TimestampJitter(Effect):
         lim = JITTER_CLIP * float(np.median(np.diff(t)))
         e = self.sigma_s * ctx.rng(f'effect:{self.name}:{self.index}:{which}'
                                    ).standard_normal(t.size)
+        if self.tau_s:
+            # e[n] = phi e[n-1] + sqrt(1 - phi^2) w[n], started from its stationary law.
+            phi = float(np.exp(-float(t[-1] - t[0]) / (t.size - 1) / self.tau_s))
+            e[1:] *= np.sqrt(1.0 - phi * phi)
+            e = signal.lfilter([1.0], [1.0, -phi], e)
         return t + np.clip(e, -lim, lim)
 
     def stamps(self, ctx, t):

@@ -1,0 +1,87 @@
+# time_delay's gyro lag (lag_s) and timestamp_jitter's correlation time (tau_s) against ground
+# truth on simulated runs; both default to 0, which is the earlier effect unchanged.
+from dataclasses import replace
+
+from gyro_char.errors import InputError
+from gyro_char.sim.config import BenchConfig, noiseless
+from gyro_char.sim.effects import parse_effect
+from gyro_char.sim.simulator import simulate_swing
+import numpy as np
+import pytest
+
+
+def _quiet_swing():
+    return noiseless(BenchConfig.from_preset('adis16405'), keep_errors=False)
+
+
+def _quadrature(run, cfg):
+    t, g = run.imu.t, run.imu.channels['gyro_x']
+    angle = np.concatenate([[0.0], np.cumsum(0.5 * (g[1:] + g[:-1]) * np.diff(t))])
+    te, enc = run.encoder.t, run.encoder.channels['encoder']
+    inside = (te > t[0] + 0.5) & (te < t[-1] - 0.5)
+    w = 2 * np.pi / cfg.stand.period_s
+    ts = te[inside]
+    cols = np.c_[np.sin(w * ts), np.cos(w * ts), np.ones_like(ts), ts]
+    resid = np.interp(ts, t, angle) - enc[inside]
+    return np.linalg.lstsq(cols, resid, rcond=None)[0][1] / (cfg.stand.amplitude * w)
+
+
+@pytest.mark.parametrize('delay, lag', [(2e-3, 2e-3), (3e-3, 1e-3), (4e-4, 4e-4)])
+def test_lag_and_stamp_shift_add_up_to_delay_s(delay, lag):
+    cfg = _quiet_swing()
+    run = simulate_swing(cfg, duration=30.0, seed=1, channels=['gyro_x'],
+                         effects=[f'time_delay:delay_s={delay},lag_s={lag}'])
+    # The gyro angle lags the encoder's by delay_s, whatever part the one-pole filter takes.
+    assert -_quadrature(run, cfg) == pytest.approx(delay, rel=0.01)
+    nominal = np.arange(len(run.imu)) / cfg.gyro.rate_hz
+    assert np.allclose(run.imu.t - nominal, delay - lag, atol=1e-12)
+
+
+def test_lag_colours_white_noise_as_a_one_pole_filter():
+    quiet = noiseless(BenchConfig.from_preset('adis16405'), keep_errors=False)
+    noisy = replace(quiet, noise={'gyro_x': {'N': 1e-2}})
+    lag, dt = 2.5e-3, 1.0 / quiet.gyro.rate_hz
+
+    def noise(fx):   # the gyro noise alone: noisy minus noise-free run, same seed
+        x, y = (simulate_swing(c, duration=200.0, seed=4, channels=['gyro_x'], effects=fx)
+                .imu.channels['gyro_x'] for c in (noisy, quiet))
+        return x - y
+    n0, n1 = noise([]), noise([f'time_delay:delay_s={lag},lag_s={lag}'])
+    a = lag / (lag + dt)
+    rho = np.sum(n1[1:] * n1[:-1]) / np.sum(n1 * n1)
+    # AR(1) of white input: lag-1 autocorrelation a, variance (1 - a) / (1 + a) of the input's.
+    assert rho == pytest.approx(a, abs=0.01)
+    assert np.var(n1) / np.var(n0) == pytest.approx((1 - a) / (1 + a), rel=0.02)
+
+
+def test_defaults_are_the_earlier_effects_bit_for_bit():
+    cfg = noiseless(BenchConfig.from_preset('adis16405'))
+    pairs = [(['time_delay:delay_s=0.002'], ['time_delay:delay_s=0.002,lag_s=0']),
+             (['timestamp_jitter:sigma_s=5e-5'], ['timestamp_jitter:sigma_s=5e-5,tau_s=0'])]
+    for a, b in pairs:
+        ra, rb = (simulate_swing(cfg, duration=10.0, seed=3, channels=['gyro_x'], effects=fx)
+                  for fx in (a, b))
+        assert np.array_equal(ra.imu.t, rb.imu.t) and np.array_equal(ra.encoder.t, rb.encoder.t)
+        assert np.array_equal(ra.imu.channels['gyro_x'], rb.imu.channels['gyro_x'])
+    assert parse_effect('time_delay').lag_s == 0.0 and parse_effect('timestamp_jitter').tau_s == 0
+
+
+@pytest.mark.parametrize('tau', [0.0, 5e-3, 0.05])
+def test_correlated_stamp_error_is_gauss_markov(tau):
+    cfg = _quiet_swing()
+    sigma = 2e-4
+    run = simulate_swing(cfg, duration=300.0, seed=5, channels=['gyro_x'],
+                         effects=[f'timestamp_jitter:sigma_s={sigma},stream=0,tau_s={tau}'])
+    dt = 1.0 / cfg.gyro.rate_hz
+    e = run.imu.t - np.arange(len(run.imu)) * dt
+    assert np.std(e) == pytest.approx(sigma, rel=0.05 if tau < 0.01 else 0.15)
+    for k in (1, 10):
+        rho = np.sum(e[k:] * e[:-k]) / np.sum(e * e)
+        assert rho == pytest.approx(np.exp(-k * dt / tau) if tau else 0.0, abs=0.03)
+
+
+def test_negative_lag_or_correlation_time_is_refused():
+    with pytest.raises(InputError):
+        parse_effect('time_delay:lag_s=-1e-3')
+    with pytest.raises(InputError):
+        parse_effect('timestamp_jitter:tau_s=-1')
