@@ -10,8 +10,11 @@ baseline's (timestamp_jitter). A candidate's residual is then the baseline twin'
 residual N plus the effect's own residual D, and for its observables:
 
 - linear parts: exactly N's plus D's (the residual fit is a fixed projection);
-- quadratic parts: E|N + D|^2 = E|N|^2 + |D|^2 (the cross term has zero mean), so each
-  pseudo-twin gets its baseline twin's parts plus D's.
+- quadratic parts: the twin's residual is A + N with A the motion's own deterministic part
+  (the gyro angle interpolated at the encoder stamps), so E|A + D + N|^2 = E|A + N|^2 +
+  (|A + D|^2 - |A|^2): each pseudo-twin gets its baseline twin's parts plus that
+  difference, taken from the noise-free runs (the cross term with N has zero mean; the one
+  with A does not, and was 10 sigma in a 2.5 s-period record's line and rate-bin blocks).
 
 N's parts come from full-length twins of the baseline, simulated once per seed (common random
 numbers across candidates). D's come from a NOISE-FREE simulation of the baseline with and
