@@ -70,3 +70,34 @@ def test_excess_gap_reported_and_shrinks_when_explained():
     j = d.to_json()['excess_gap']
     assert j['baseline'] > 5.0 * max(j['final'], 0.1)
     assert j['final'] < d.final_gap
+
+
+def _misfit_problem(unresolved):
+    """Build a toy whose true shape is PATTERN and whose look-alike's is a little off (tilt)."""
+    tilt = 1.0 + 0.7 * np.linspace(-1.0, 1.0, 12)
+
+    def simulate(i, effects, s):
+        a = 0.1 * np.random.default_rng(s).standard_normal(12)
+        for name, p in effects:
+            a = a + p['k'] * (PATTERN if name == 'time_delay' else PATTERN * tilt)
+        return {'a': a}
+
+    real = {'a': 0.1 * np.random.default_rng(7).standard_normal(12) + 3.0 * PATTERN}
+    spaces = [EffectSpace(n, [Param('k', 0.01, 10.0)]) for n in ('time_delay', 'g_sensitivity')]
+    return diagnose.Problem(kind='toy', reals=[real], simulate=simulate, spaces=spaces,
+                            ranges=[{'a': np.c_[np.arange(12), np.arange(12) + 1.0]}],
+                            units={'a': 'bin'}, unresolved=unresolved)
+
+
+def test_an_unresolved_look_alike_is_flagged_even_when_its_gap_is_clearly_larger():
+    # The look-alike's shape misfit puts its gap far above the best's: by the gaps alone it
+    # is not a rival. When the records cannot tell the pair apart, it is flagged all the same.
+    plain = diagnose.run(_misfit_problem(frozenset()), repeats=10)
+    assert plain.selected_effects[0] == 'time_delay' and plain.ambiguous == []
+    gaps = {r['effect']: r['gap_after'] for r in plain.ranking}
+    assert gaps['g_sensitivity'] > gaps['time_delay'] + 4 * plain.null_gap['std']
+    pair = frozenset({'time_delay', 'g_sensitivity'})
+    flagged = diagnose.run(_misfit_problem(frozenset({pair})), repeats=10)
+    assert flagged.selected_effects[0] == 'time_delay'
+    assert set(flagged.ambiguous[0]['effects']) == pair and flagged.ambiguous[0]['selected']
+    assert 'second swing period' in flagged.ambiguous[0]['separating_run']

@@ -1,6 +1,9 @@
 # The swing kind of the diagnosis on simulated swing records with an effect it is not told of.
+from types import SimpleNamespace
+
 from gyro_char.diagnosis import (engine as diagnose, gap as diag_gap, swing as diag_swing,
                                  swing_obs as diag_swing_obs)
+from gyro_char.diagnosis.swing_spaces import unresolved_pairs
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 from gyro_char.swing.filter import estimate_swing
@@ -144,3 +147,15 @@ def test_twin_encoder_noise_is_pinned_where_stamp_jitter_vanishes():
     clean_imu, clean_enc = _record([], 48)
     assert diag_swing.turning_noise(enc, 5.0) == pytest.approx(
         diag_swing.turning_noise(clean_enc, 5.0), rel=0.15)
+
+
+def test_unresolved_pairs_follow_the_periods_and_peak_rates_given():
+    def run(period, peak):
+        return SimpleNamespace(period_s=period, peak_rate=peak)
+    delay = frozenset({'time_delay', 'g_sensitivity'})
+    asym = frozenset({'scale_factor_asymmetry', 'scale_factor_nonlinearity'})
+    assert unresolved_pairs([run(5.0, 0.44)]) == {delay, asym}
+    # A second period at the same amplitude changes both; a second amplitude at the same
+    # period only the peak rate.
+    assert unresolved_pairs([run(5.0, 0.44), run(2.5, 0.88)]) == frozenset()
+    assert unresolved_pairs([run(5.0, 0.44), run(5.0, 0.88)]) == {delay}

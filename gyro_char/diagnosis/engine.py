@@ -65,6 +65,12 @@ class Problem:
     # The simulator's own twins, ``twin(i, effects, seed)``, when ``simulate`` approximates
     # them (the swing kind's pseudo-twins): the check of the selected model.
     twin: Optional[Callable[[int, list, int], Obs]] = None
+    # Known look-alike pairs (``greedy.SEPARATING_RUNS``) that the records given cannot tell
+    # apart (one swing period: a delay and g-sensitivity leave the same cos θ residual). A
+    # rival from such a pair is flagged whenever it removes ``UNRESOLVED_SHARE`` of what the
+    # best removes, however the two gaps compare: their difference is then the catalogue
+    # shapes' fit to a real shape, not evidence.
+    unresolved: frozenset = frozenset()
 
 
 def objective_for(problem: Problem, seeds: Sequence[int]):
@@ -123,6 +129,9 @@ class Diagnosis:
 # With a choice criterion, a candidate is compared with the best one by the gap when it
 # removes at least this share of what the best removes.
 COMPARABLE = 0.5
+# A rival of an unresolved look-alike pair (``Problem.unresolved``) is flagged when it removes
+# at least this share of what the best removes.
+UNRESOLVED_SHARE = 0.8
 EXCESS_METRIC = 'sqrt(gap^2 - mean null gap^2), 0 when below'
 
 
@@ -214,6 +223,9 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                   and (judged[n] - judged[best] <= shrink_needed
                        or judged[n] - judged[best] <= could_trail(
                            objective, fits[n][2], fits[best][2], scatters))]
+        rivals += [n for n in order[1:] if n not in rivals
+                   and frozenset({best, n}) in problem.unresolved
+                   and gap_now - judged[n] >= UNRESOLVED_SHARE * (gap_now - judged[best])]
         scores = {}
         if problem.choose is not None:
             # Candidates that close the gap comparably (the rivals, and any that remove at

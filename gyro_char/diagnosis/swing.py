@@ -26,7 +26,7 @@ from gyro_char.diagnosis.swing_baseline import PRESET, static_noise, SwingBaseli
 from gyro_char.diagnosis.swing_expect import EffectParts, lag_gain, pseudo_twin
 from gyro_char.diagnosis.swing_obs import (
     layout, raw_parts, residuals, swing_observables, UNITS)
-from gyro_char.diagnosis.swing_spaces import signs, swing_spaces
+from gyro_char.diagnosis.swing_spaces import signs, swing_spaces, unresolved_pairs
 from gyro_char.diagnosis.twins import output_step, twin_effects
 from gyro_char.errors import InputError
 from gyro_char.records import ENCODER_CHANNEL, Recording
@@ -357,7 +357,8 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
         baseline['pooled_scale_factor_error'] = {'value': sf, 'sigma': sf_sigma, 'unit': '1'}
         baseline['records'] = [b.to_json() for b in bases]
     return Problem(kind='swing', reals=reals, simulate=simulate, spaces=spaces, ranges=ranges,
-                   units=units, baseline=baseline, context=bases, twin=sim)
+                   units=units, baseline=baseline, context=bases, twin=sim,
+                   unresolved=unresolved_pairs(bases))
 
 
 def expected_twins(bases: Sequence[SwingBaseline], ranges: Sequence[dict], shift: bool):

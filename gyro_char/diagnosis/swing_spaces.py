@@ -130,3 +130,21 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
                   integer=True)
     fixed = {k: v for k, v in sp.fixed.items() if k != 'lines'}
     return EffectSpace(sp.name, list(sp.params) + [lines], fixed, {**sp.start, 'lines': start})
+
+
+def unresolved_pairs(bases: Sequence[SwingBaseline], rel: float = 0.1) -> frozenset:
+    """
+    Return the look-alike pairs that swing runs with these baselines cannot tell apart.
+
+    One period (all within ``rel``): a delay and g-sensitivity (cos θ residuals scaling as
+    A·ω and g·A/ω). One peak rate A·ω: an asymmetry and a quadratic scale factor (2f lines
+    growing as the peak rate and as its square).
+    """
+    def one(values):
+        return max(values) <= (1.0 + rel) * min(values)
+    out = set()
+    if one([b.period_s for b in bases]):
+        out.add(frozenset({'time_delay', 'g_sensitivity'}))
+    if one([b.peak_rate for b in bases]):
+        out.add(frozenset({'scale_factor_asymmetry', 'scale_factor_nonlinearity'}))
+    return frozenset(out)
