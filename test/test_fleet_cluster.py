@@ -113,9 +113,12 @@ def test_ctrl_c_then_the_same_command_resumes(cluster, tmp_path):
         shutil.copy(cluster['data'] / f'imu{i % N_DEVICES}.csv', data / f'imu{i}.csv')
     argv = ['fleet', str(data), '--scheduler', cluster['address'], '--out',
             str(out), '--allan-options=--boot 10 --seed 3']
+    # As from a terminal: SIGINT at its default, even when this test runs in a background job
+    # of a shell without job control (which starts its children with SIGINT ignored).
     proc = subprocess.Popen([sys.executable, '-c', CLI] + argv, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True,
-                            env=dict(os.environ, MPLBACKEND='Agg'))
+                            env=dict(os.environ, MPLBACKEND='Agg'),
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     _wait(lambda: len(_outcomes(out)) >= 1, 180, 'a first finished device')
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
