@@ -150,3 +150,27 @@ def test_selected_model_follows_the_real_adis16405_curve(method, adis_session1):
         ok = ((model >= np.minimum(avar / 2.0, lo ** 2))
               & (model <= np.maximum(avar * 2.0, hi ** 2)))
         assert np.all(ok), (name, fit.tau[sel][~ok], (avar / model)[~ok])
+
+
+def test_a_constant_channel_is_refused_not_fitted_on_rounding():
+    # A fixed 9.81 m/s^2 through the streaming sums leaves Allan variances of ~1e-55: noise of
+    # the arithmetic. It must fail with a reason, while a tiny but real noise still fits.
+    from dataclasses import replace
+    from gyro_char.live.allan_live import AllanLive
+    rng = np.random.default_rng(3)
+    n = 6000
+    t = np.arange(n) * 0.003
+    x = np.c_[np.full(n, 9.81), 9.81 + 1e-9 * rng.standard_normal(n)]
+    live = AllanLive(('accel_z', 'accel_y'), m_max=4096)
+    for k in range(0, n, 200):
+        live.add(t[k:k + 200], x[k:k + 200])
+    res = live.result()
+    assert 0 < res.avar[:, 0].max() < 1e-45   # the rounding residue this guards against
+    const = replace(res, avar=res.avar[:, [0]], edf=res.edf[:, [0]], alpha=res.alpha[:, [0]],
+                    channels=('accel_z',))
+    with pytest.raises(ValueError, match='constant'):
+        fit_result(const, n_boot=4)
+    tiny = replace(res, avar=res.avar[:, [1]], edf=res.edf[:, [1]], alpha=res.alpha[:, [1]],
+                   channels=('accel_y',))
+    fit = fit_result(tiny, n_boot=4)['accel_y']
+    assert fit.coeffs()['N'] == pytest.approx(1e-9 * np.sqrt(0.003), rel=0.1)

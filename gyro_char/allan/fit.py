@@ -35,6 +35,11 @@ except ImportError:  # pragma: no cover - optional
 LO_MIN = 0.2
 BOUND_CI = 0.9
 N_BOOT = 100
+# Allan variances at or below this (SI units squared) are arithmetic, not noise: a constant
+# channel (an accelerometer that reports a fixed 9.81) leaves ~1e-55 from the running sums,
+# which a log-domain fit would turn into a confident, meaningless N. The best strategic-grade
+# gyros sit near 1e-20.
+AVAR_FLOOR = 1e-40
 
 
 @dataclass
@@ -170,7 +175,10 @@ def fit_noise(tau, avar, edf, alpha=None, *, channel: str = 'gyro_x', method: st
     kind = sensor_kind(channel)
     tau, avar, edf = (np.asarray(v, dtype=np.float64) for v in (tau, avar, edf))
     alpha = np.zeros(tau.size, dtype=int) if alpha is None else np.asarray(alpha, dtype=int)
-    sel = (avar > 0) & np.isfinite(edf) & (edf > 0)
+    if not np.any(avar > AVAR_FLOOR):
+        raise ValueError(f'{channel}: constant (Allan variance at most {AVAR_FLOOR:g} at every '
+                         'tau: no noise to fit)')
+    sel = (avar > AVAR_FLOOR) & np.isfinite(edf) & (edf > 0)
     if tau_min is not None:
         sel &= tau >= tau_min
     if tau_max is not None:
