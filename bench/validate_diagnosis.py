@@ -82,25 +82,24 @@ def hyperbolic_warmup(x, rng, amplitude, tau):
     return x + amplitude / (1.0 + t / tau)
 
 
-def gm_sum_flicker(x, rng, b):
-    out = np.zeros_like(x)
-    for tc in np.geomspace(1.0, 300.0, 5):
+def gm_sum(n, rng, taus):
+    """Sum of unit-variance first-order Gauss-Markov processes, one per correlation time."""
+    out = np.zeros(n)
+    for tc in taus:
         a = np.exp(-DT / tc)
-        w = rng.standard_normal(x.size) * np.sqrt(1 - a * a)
+        w = rng.standard_normal(n) * np.sqrt(1 - a * a)
         w[0] = rng.standard_normal()
         out += signal.lfilter([1.0], [1.0, -a], w)
-    return x + b * out / np.sqrt(5.0) * 1.5
+    return out
+
+
+def gm_sum_flicker(x, rng, b):
+    return x + b * gm_sum(x.size, rng, np.geomspace(1.0, 300.0, 5)) / np.sqrt(5.0) * 1.5
 
 
 def gm_band_flicker(x, rng, b):
     """Four first-order Gauss-Markov processes, tau 0.2-200 s, equal variance each."""
-    out = np.zeros_like(x)
-    for tc in np.geomspace(0.2, 200.0, 4):
-        a = np.exp(-DT / tc)
-        w = rng.standard_normal(x.size) * np.sqrt(1 - a * a)
-        w[0] = rng.standard_normal()
-        out += signal.lfilter([1.0], [1.0, -a], w)
-    return x + b * out / 2.0
+    return x + b * gm_sum(x.size, rng, np.geomspace(0.2, 200.0, 4)) / 2.0
 
 
 def laplace_rw(x, rng, k):

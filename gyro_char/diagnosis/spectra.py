@@ -50,13 +50,15 @@ def _resonance(sigma: float, freq_hz: float, q: float, dt: float) -> Callable:
 def _flicker(b: float, corner_hz: float, dt: float) -> Callable:
     # Kasdin-Walter 1/f; with an upper corner times the half-order lowpass of noise_gen.flicker,
     # (1 - c) / |1 - c e^(-i w)|, c = exp(-2 pi corner dt): 1/f^2 above the corner.
+    def one_over_f(f):
+        return b * b * dt / (2.0 * np.sqrt(_sin2(f, dt)))
     if not corner_hz:
-        return lambda f: b * b * dt / (2.0 * np.sqrt(_sin2(f, dt)))
+        return one_over_f
     c = float(np.exp(-2.0 * np.pi * corner_hz * dt))
 
     def psd(f):
         den = np.sqrt(1.0 - 2.0 * c * np.cos(2.0 * np.pi * f * dt) + c * c)
-        return b * b * dt / (2.0 * np.sqrt(_sin2(f, dt))) * (1.0 - c) / den
+        return one_over_f(f) * (1.0 - c) / den
     return psd
 
 

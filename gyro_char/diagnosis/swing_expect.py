@@ -138,19 +138,20 @@ class EffectParts:
 
     def _difference(self, i: int, res0, res, cross: bool = False) -> dict:
         # Sample by sample: the same sample numbers of both runs (a stamp shift may drop
-        # an edge sample from one of them). ``cross``: the quadratic parts are those of the
-        # run with the effect minus those without, so they keep the cross term of D with
-        # the motion's own deterministic residual A (interpolation of the gyro angle at the
-        # encoder stamps), which every twin shares: E|A + D + N|^2 - E|A + N|^2.
+        # an edge sample from one of them). ``cross``: the parts are those of the run with
+        # the effect minus those without, so the quadratic ones keep the cross term of D
+        # with the motion's own deterministic residual A (interpolation of the gyro angle at
+        # the encoder stamps), which every twin shares: E|A + D + N|^2 - E|A + N|^2 (the
+        # linear ones are D's either way: the residual fit is a fixed projection).
         cg, ig0, ig = np.intersect1d(res0.idx_g, res.idx_g, return_indices=True)
         ce, ie0, ie = np.intersect1d(res0.idx_e, res.idx_e, return_indices=True)
         geo = res0.take(ig0, ie0)
-        part = raw_parts(geo, self.ranges[i], res.r[ig] - geo.r, res.r_e[ie] - geo.r_e)
-        if cross:
-            with_fx, without = (raw_parts(geo, self.ranges[i], res.r[ig], res.r_e[ie]),
-                                raw_parts(geo, self.ranges[i]))
-            part.update({q: with_fx[q] - without[q] for q in QUADRATIC})
-        return part
+        if not cross:
+            return raw_parts(geo, self.ranges[i], res.r[ig] - geo.r, res.r_e[ie] - geo.r_e)
+        with_fx, without = (raw_parts(geo, self.ranges[i], res.r[ig], res.r_e[ie]),
+                            raw_parts(geo, self.ranges[i]))
+        return {**with_fx, **{q: with_fx[q] - without[q] for q in LINEAR + QUADRATIC
+                              if q in with_fx}}
 
     def _as_noise(self, i: int, part: dict, span_s: float) -> dict:
         # Zero-mean linear parts; a noise's squared line amplitudes scale as 1 / length.

@@ -134,12 +134,16 @@ class _NoiseTerm(Effect):
         if self.params[self.term] < 0:
             raise InputError(f'{self.name}: {self.term} must be >= 0')
 
+    def series(self, n: int, ctx, rng) -> np.ndarray:
+        """Return one axis's ``n`` internal samples of the process."""
+        return noise_gen.generate(n, ctx.dt_internal, rng=rng,
+                                  **{self.term: self.params[self.term]})
+
     def sensor(self, ctx, gyro, accel):
         gyro = gyro.copy()
         rng = self.rng(ctx)
         for r in _rows(self):
-            gyro[r] += noise_gen.generate(gyro.shape[1], ctx.dt_internal, rng=rng,
-                                          **{self.term: self.params[self.term]})
+            gyro[r] += self.series(gyro.shape[1], ctx, rng)
         return gyro, accel
 
     def update_truth(self, ctx, truth):
@@ -171,15 +175,10 @@ class BiasInstability(_NoiseTerm):
         if self.corner_hz < 0:
             raise InputError('bias_instability: corner_hz must be >= 0')
 
-    def sensor(self, ctx, gyro, accel):
+    def series(self, n: int, ctx, rng) -> np.ndarray:
         if not self.corner_hz:
-            return super().sensor(ctx, gyro, accel)   # 1/f up to Nyquist, as always
-        gyro = gyro.copy()
-        rng = self.rng(ctx)
-        for r in _rows(self):
-            gyro[r] += self.B * noise_gen.flicker(gyro.shape[1], rng,
-                                                  corner=self.corner_hz * ctx.dt_internal)
-        return gyro, accel
+            return super().series(n, ctx, rng)   # 1/f up to Nyquist, as always
+        return self.B * noise_gen.flicker(n, rng, corner=self.corner_hz * ctx.dt_internal)
 
 
 @register
