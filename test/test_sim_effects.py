@@ -227,6 +227,21 @@ def test_scale_factor_nonlinearity_harmonics():
     assert c[5] == pytest.approx(k3 * big_w ** 3 / 4, rel=1e-3)
 
 
+def test_scale_factor_fifth_order_term_harmonics():
+    cfg = _swing_cfg()
+    k5 = 0.4
+    run = simulate_swing(cfg, duration=20.0, seed=11, channels=['gyro_x'],
+                         effects=[f'scale_factor_nonlinearity:k2=0,k5={k5}'])
+    w = 2 * np.pi / cfg.stand.period_s
+    big_w = cfg.stand.amplitude * w
+    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 5)
+    # cos^5 = (10 cos + 5 cos 3x + cos 5x) / 16
+    assert c[1] == pytest.approx(big_w + 10 * k5 * big_w ** 5 / 16, rel=1e-5)
+    assert c[5] == pytest.approx(5 * k5 * big_w ** 5 / 16, rel=1e-3)
+    assert c[9] == pytest.approx(k5 * big_w ** 5 / 16, rel=1e-2)
+    assert abs(c[0]) < 1e-4 * k5 * big_w ** 5 and abs(c[3]) < 1e-4 * k5 * big_w ** 5
+
+
 def test_scale_factor_asymmetry_dc_and_second_harmonic():
     cfg = _swing_cfg()
     a = 0.01

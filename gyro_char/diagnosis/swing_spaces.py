@@ -5,6 +5,7 @@ Bounds come from the record's own noise (what an effect must reach to be seen); 
 parameters get the sign that moves the twins towards the record, and the encoder's line
 count starts at the line the record's encoder residual shows (``signs``).
 """
+from dataclasses import replace
 from typing import Callable, List, Optional, Sequence
 
 from gyro_char.diagnosis.fit import EffectSpace, Param
@@ -16,7 +17,7 @@ G0 = 9.80665
 
 
 def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
-    """Search spaces scaled to the record (sign of signed parameters set by ``_signs``)."""
+    """Search spaces scaled to the record (sign of signed parameters set by ``signs``)."""
     w = 2.0 * np.pi / base.period_s
     rate = base.amplitude * w                       # peak swing rate, rad/s
     sig = base.N / np.sqrt(base.duration)           # rate noise averaged over the record
@@ -33,9 +34,11 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
                                          init=LAG_GRID[0] * base.dt)]),
         EffectSpace('g_sensitivity', [Param('gy', 0.5 * q * w / (G0 * base.amplitude),
                                             200.0 * q * w / (G0 * base.amplitude))]),
+        # Up to 3000 record-averaged noise sds at the peak rate: a saturation 30 % down at
+        # twice the peak rate (k3 ~ -0.4 s^2/rad^2 at 0.44 rad/s) is inside.
         EffectSpace('scale_factor_nonlinearity', [
-            Param('k2', 0.03 * sig / rate ** 2, 300.0 * sig / rate ** 2),
-            Param('k3', 0.03 * sig / rate ** 3, 300.0 * sig / rate ** 3)]),
+            Param('k2', 0.03 * sig / rate ** 2, 3000.0 * sig / rate ** 2),
+            Param('k3', 0.03 * sig / rate ** 3, 3000.0 * sig / rate ** 3)]),
         EffectSpace('scale_factor_asymmetry', [Param('a', 0.03 * sig / rate,
                                                      300.0 * sig / rate)]),
         # Line count: started by ``signs`` at the record's line-spectrum peak (exact to a
@@ -88,9 +91,9 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
                 probe = [simulate(i, fx, 4242) for i in idx]
                 resp = np.concatenate([probe[i][b] - base[i][b] for i in idx for b in blocks])
                 sign = 1.0 if float(np.einsum('i,i->', resp, dev)) >= 0 else -1.0
-                p = Param(p.name, p.lo, p.hi, p.log, p.integer, sign)
+                p = replace(p, sign=sign)
             params.append(p)
-        out.append(EffectSpace(sp.name, params, dict(sp.fixed), dict(sp.start)))
+        out.append(EffectSpace(sp.name, params, dict(sp.fixed), dict(sp.start), sp.passes))
     return out
 
 
@@ -129,7 +132,8 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
     lines = Param('lines', max(1.0, np.floor(0.99 * start)), np.ceil(1.01 * start),
                   integer=True)
     fixed = {k: v for k, v in sp.fixed.items() if k != 'lines'}
-    return EffectSpace(sp.name, list(sp.params) + [lines], fixed, {**sp.start, 'lines': start})
+    return EffectSpace(sp.name, list(sp.params) + [lines], fixed, {**sp.start, 'lines': start},
+                       sp.passes)
 
 
 def unresolved_pairs(bases: Sequence[SwingBaseline], rel: float = 0.1) -> frozenset:

@@ -13,20 +13,25 @@ import numpy as np
 
 @register
 class ScaleFactorNonlinearity(Effect):
-    """Quadratic and cubic terms of the rate response."""
+    """Quadratic, cubic and fifth-order terms of the rate response."""
 
     name = 'scale_factor_nonlinearity'
-    summary = 'rate response with quadratic / cubic terms'
-    physics = ('omega_out += k2 omega^2 + k3 omega^3 on every gyro axis (omega: true rate '
-               'along that axis). For omega = W cos(wt): k2 gives a DC offset k2 W^2 / 2 and '
-               'a 2f line k2 W^2 / 2; k3 gives 3 k3 W^3 / 4 at f (an apparent scale-factor '
-               'error 3 k3 W^2 / 4) and a 3f line k3 W^3 / 4.')
+    summary = 'rate response with quadratic / cubic / fifth-order terms'
+    physics = ('omega_out += k2 omega^2 + k3 omega^3 + k5 omega^5 on every gyro axis (omega: '
+               'true rate along that axis). For omega = W cos(wt): k2 gives a DC offset '
+               'k2 W^2 / 2 and a 2f line k2 W^2 / 2; k3 gives 3 k3 W^3 / 4 at f (an apparent '
+               'scale-factor error 3 k3 W^2 / 4) and a 3f line k3 W^3 / 4; k5 gives '
+               '10 k5 W^5 / 16 at f, 5 k5 W^5 / 16 at 3f and k5 W^5 / 16 at 5f. A saturation '
+               'or a range switch bends the response beyond a cube: at one peak rate k5 looks '
+               'like k3, at two peak rates their lines grow as W^5 and W^3.')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
-              'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient')}
+              'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient'),
+              'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient')}
 
     def sensor(self, ctx, gyro, accel):
         w = ctx.true_rate
-        return gyro + self.k2 * w * w + self.k3 * w * w * w, accel
+        w2 = w * w
+        return gyro + w2 * (self.k2 + w * (self.k3 + self.k5 * w2)), accel
 
 
 @register
