@@ -97,7 +97,6 @@ def noise_shape(x: np.ndarray, step: float) -> np.ndarray:
 
 def shapes(dt: float, sig: float, n_arw: float) -> dict:
     """Return ``{name: (generator, [weak, strong, edge])}`` for the sample time ``dt``."""
-    inc = n_arw * np.sqrt(dt)                # per-sample white angle increment, rad
 
     def decimation_fir(x, rng, cutoff):
         h = fir(cutoff)
