@@ -50,7 +50,10 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
   + 40 / (3 n)) (as sets B and C);
 - Duffing: half of sigma_r^2 in a band B = f0 / q + 2 kappa f0 (linear width plus the energy
   shift) against the white band power: z = sigma_r^2 sqrt(T) / (4 sigma^2 dt sqrt(B)).
-Edges are set at z ~ 4; weak and strong are 8-1600x further above.
+Edges are set at z ~ 4; weak and strong are 8-1600x further above. Physical scale: the strong
+draught (0.086 deg/s) is ~6 degC at the ADIS16405's 0.0135 deg/s/degC; the re-quantization
+steps (0.06-0.48 deg/s) are a DSP output word cut to 8-11 bits; the Duffing shift 2 kappa is
+4 % of f0.
 """
 from gyro_char.allan.expected import markov_avar
 import numpy as np

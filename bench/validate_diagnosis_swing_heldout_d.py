@@ -41,7 +41,10 @@ Levels (``detectability``; 15 min, 1 kHz gyro and encoder, adis16405 preset: A =
   residual on the run's grid, S_n the two-sided angle noise N^2 / (2 pi f)^2 plus the
   encoder's white floor and the preset's stamp jitter (as set C's latency), so lines the gyro
   noise hides at low frequency count little.
-Edges are at z ~ 4 at the 5 s period; weak and strong are 4-50x further (the sawtooth's more).
+Edges are at z ~ 4 at the 5 s period (at 2.5 s: delay 4x, asymmetry, sawtooth and disk ~2x,
+hysteresis 1x, lock-in 0.5x: the swing spends less time in its dead band); weak and strong are
+4-21x further in z, the sawtooth's 12-63x (100 and 500 ppm: a crystal and an RC clock). The
+strong disk error (eccentricity 3 mrad) is a magnetic or low-grade optical encoder's.
 """
 from gyro_char.sim.config import BenchConfig
 import numpy as np
