@@ -3,43 +3,20 @@
 # claim, and both harnesses reach them by --held-out c. THE GENERATORS only, never the diagnosis.
 # (A file of its own: test_heldout_shapes.py, which checks set B, would pass the 420-line limit.)
 import bench_script
-from gyro_char.allan.kernel import overlapping_avar
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
+                            fit, N_ARW, SIG, stand, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
 
-DT = 0.01
-N_ARW = 2.4 * np.pi / 180.0 / 60.0
-SIG = N_ARW / np.sqrt(DT)
 STATIC = bench_script.load('validate_diagnosis_heldout_c')
 SWING = bench_script.load('validate_diagnosis_swing_heldout_c')
 SHAPES = STATIC.shapes(DT, SIG, N_ARW)
 SWING_SHAPES = SWING.shapes(1000.0)
-AMP, PERIOD = np.deg2rad(20.0), 5.0
-W = 2 * np.pi / PERIOD
-
-
-def _avar(y, m):
-    return overlapping_avar(y, DT, m=m)[1]
-
-
-def _fit(y, cols):
-    return np.linalg.lstsq(np.c_[tuple(cols)], y, rcond=None)[0]
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    assert sorted(SHAPES) == sorted(['internal_lowpass', 'vibration', 'temperature_drift',
-                                     'bias_instability', 'rate_random_walk', 'gauss_markov',
-                                     'quantization', 'resonance'])
-    for name, (fn, levels) in SHAPES.items():
-        weak, strong, edge = [STATIC.detectability(name, p, DT, SIG, N_ARW) for p in levels]
-        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
-        for p in levels:
-            rng = np.random.default_rng(1)
-            x = SIG * rng.standard_normal(20000) + 0.003
-            y = fn(x.copy(), rng, **p)
-            assert y.shape == x.shape and np.all(np.isfinite(y)), name
-            assert not np.allclose(y, x, rtol=0, atol=1e-12), name
+    check_static_set(STATIC, SHAPES)
 
 
 @pytest.mark.parametrize('cutoff', [0.3, 0.6, 0.9955])
@@ -76,7 +53,7 @@ def test_thermostat_is_periodic_hysteretic_and_its_line_is_the_detectability_one
     t = np.arange(n) * DT
     cols = (np.sin(2 * np.pi * t / STATIC.THERMO_PERIOD),
             np.cos(2 * np.pi * t / STATIC.THERMO_PERIOD), np.ones(n))
-    lines = [np.hypot(*_fit(fn(np.zeros(n), np.random.default_rng(s), amplitude=amp), cols)[:2])
+    lines = [np.hypot(*fit(fn(np.zeros(n), np.random.default_rng(s), amplitude=amp), cols)[:2])
              for s in range(8)]
     assert np.mean(lines) == pytest.approx(STATIC.fundamental(amp, DT, n), rel=0.03)
     assert np.min(lines) > 0.8 * np.mean(lines)
@@ -92,7 +69,7 @@ def test_telegraph_sum_flicker_psd_slope_minus_one_and_allan_floor():
     assert np.polyfit(np.log(f[sel]), np.log(p[sel]), 1)[0] == pytest.approx(-1.0, abs=0.1)
     assert np.median(p[sel] * np.pi * f[sel]) == pytest.approx(1.0, rel=0.15)   # B^2 / (pi f)
     for m in (10, 100, 1000):
-        adev = np.mean([np.sqrt(_avar(y, [m])[0]) for y in ys])
+        adev = np.mean([np.sqrt(avar(y, [m])[0]) for y in ys])
         assert adev == pytest.approx(0.664, rel=0.15)
 
 
@@ -104,7 +81,7 @@ def test_intermittent_walk_diffuses_at_k_squared_in_episodes():
     block = d[:d.size // 10000 * 10000].reshape(-1, 10000).var(axis=1) / DT   # 100 s blocks
     assert np.percentile(block, 90) / np.percentile(block, 10) > 4.0      # 1.8 vs 0.2 K^2
     m = np.array([5000, 80000])
-    a = _avar(y, m)
+    a = avar(y, m)
     assert a[1] == pytest.approx(80000 * DT / 3, rel=0.35)
     assert np.log(a[1] / a[0]) / np.log(16.0) == pytest.approx(1.0, abs=0.2)
 
@@ -115,7 +92,7 @@ def test_popcorn_two_levels_correlation_and_allan():
     assert set(np.unique(y)) == {-2.0, 2.0}
     assert np.corrcoef(y[:-20], y[20:])[0, 1] == pytest.approx(np.exp(-1), abs=0.02)
     m = int(1.89 * 0.2 / DT)
-    assert _avar(y, [m])[0] == pytest.approx(STATIC.gm_avar(m * DT, 2.0, 0.2), rel=0.05)
+    assert avar(y, [m])[0] == pytest.approx(STATIC.gm_avar(m * DT, 2.0, 0.2), rel=0.05)
 
 
 @pytest.mark.parametrize('c', [0.29, 3.0])
@@ -130,7 +107,7 @@ def test_dithered_counter_angle_error_uniform_white_and_allan_excess(c):
     assert np.var(e) == pytest.approx(v, rel=0.05)
     assert abs(np.corrcoef(e[:-1], e[1:])[0, 1]) < 0.03
     assert np.ptp(e) <= step * (1 + 1e-9)
-    excess = (_avar(y, [1])[0] - _avar(x, [1])[0]) / (3 * v / DT ** 2)
+    excess = (avar(y, [1])[0] - avar(x, [1])[0]) / (3 * v / DT ** 2)
     assert excess == pytest.approx(1.0, abs=0.1)
 
 
@@ -146,46 +123,25 @@ def test_split_mode_pair_rms_and_two_peaks():
     assert p[mid] < 0.7 * p[np.abs(f - 33.0 * 0.98) < 0.25].max()        # a dip between
 
 
-def _stand(t):
-    return AMP * np.sin(W * t), AMP * W * np.cos(W * t)
-
-
-def _swing(fn, p, duration=60.0):
-    t = np.arange(int(duration * 1000)) * 1e-3
-    angle, rate = _stand(t)
-    return t, rate, fn(t, rate.copy(), t.copy(), angle.copy(), _stand,
-                       np.random.default_rng(10), **p)
-
-
 def test_swing_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    assert sorted(SWING_SHAPES) == sorted(['time_delay', 'g_sensitivity',
-                                           'scale_factor_nonlinearity', 'scale_factor_asymmetry',
-                                           'timestamp_jitter', 'encoder_cyclic_error'])
-    for name, (fn, levels) in SWING_SHAPES.items():
-        weak, strong, edge = [SWING.detectability(name, p) for p in levels]
-        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
-        for p in levels:
-            t, rate, out = _swing(fn, p, 20.0)
-            assert len(out) == 4 and all(a.shape == t.shape and np.all(np.isfinite(a))
-                                         for a in out), name
-            assert np.all(np.diff(out[2]) > 0) and np.all(np.diff(out[0]) > 0), name
+    check_swing_set(SWING, SWING_SHAPES)
 
 
 @pytest.mark.parametrize('window', [3.8e-4, 2e-3, 8e-3])
 def test_integrate_and_dump_delays_by_half_the_window(window):
     fn, _ = SWING_SHAPES['time_delay']
-    t, rate, (_, g, _, _) = _swing(fn, {'window_s': window})
+    t, rate, (_, g, _, _) = swing(fn, {'window_s': window})
     angle = np.r_[0.0, np.cumsum((g[1:] + g[:-1]) / 2) * 1e-3]
-    c = _fit(angle - _stand(t)[0], (np.sin(W * t), np.cos(W * t), np.ones(t.size), t))
+    c = fit(angle - stand(t)[0], (np.sin(W * t), np.cos(W * t), np.ones(t.size), t))
     assert c[1] == pytest.approx(-AMP * W * window / 2, rel=0.02)
 
 
 def test_viscoelastic_g_amplitude_and_lag():
     fn, levels = SWING_SHAPES['g_sensitivity']
     gy = levels[1]['gy']
-    t, rate, (_, g, _, _) = _swing(fn, levels[1])
+    t, rate, (_, g, _, _) = swing(fn, levels[1])
     m = t > 2.0
-    c = _fit((g - rate)[m], (np.sin(W * t[m]), np.cos(W * t[m])))
+    c = fit((g - rate)[m], (np.sin(W * t[m]), np.cos(W * t[m])))
     assert np.hypot(*c) == pytest.approx(gy * SWING.G0 * 2 * special.j1(AMP)
                                          / np.hypot(1, W * SWING.G_LAG), rel=0.01)
     assert np.arctan2(-c[1], c[0]) == pytest.approx(np.arctan(W * SWING.G_LAG), abs=0.01)
@@ -193,11 +149,11 @@ def test_viscoelastic_g_amplitude_and_lag():
 
 def test_range_switch_gain_step_and_third_harmonic():
     fn, _ = SWING_SHAPES['scale_factor_nonlinearity']
-    t, rate, (_, g, _, _) = _swing(fn, {'e': 0.02})
+    t, rate, (_, g, _, _) = swing(fn, {'e': 0.02})
     err = g - rate
     hi = np.abs(rate) > SWING.RANGE_SWITCH
     assert np.all(err[~hi] == 0.0) and np.allclose(err[hi], 0.02 * rate[hi])
-    c = _fit(err, (np.cos(3 * W * t), np.sin(3 * W * t)))
+    c = fit(err, (np.cos(3 * W * t), np.sin(3 * W * t)))
     assert c[0] == pytest.approx(0.02 * SWING.harmonic(
         lambda r: r * (np.abs(r) > SWING.RANGE_SWITCH), AMP * W, 3), rel=0.01)
 
@@ -205,9 +161,9 @@ def test_range_switch_gain_step_and_third_harmonic():
 def test_comparator_asymmetry_gains_and_second_harmonic():
     fn, levels = SWING_SHAPES['scale_factor_asymmetry']
     a = levels[1]['a']
-    t, rate, (_, g, _, _) = _swing(fn, levels[1])
+    t, rate, (_, g, _, _) = swing(fn, levels[1])
     assert np.allclose(g - rate, a * np.abs(rate - SWING.COMPARATOR))
-    c = _fit(g - rate, (np.cos(2 * W * t), np.sin(2 * W * t), np.ones(t.size)))
+    c = fit(g - rate, (np.cos(2 * W * t), np.sin(2 * W * t), np.ones(t.size)))
     assert c[0] == pytest.approx(a * SWING.harmonic(lambda r: np.abs(r - SWING.COMPARATOR),
                                                     AMP * W, 2), rel=1e-3)
 
@@ -215,7 +171,7 @@ def test_comparator_asymmetry_gains_and_second_harmonic():
 def test_latency_zero_mean_stated_variance_one_sided_heavy_tail():
     fn, levels = SWING_SHAPES['timestamp_jitter']
     m = levels[0]['mean_s']
-    t, _, (_, _, te, _) = _swing(fn, levels[0], 600.0)
+    t, _, (_, _, te, _) = swing(fn, levels[0], 600.0)
     e = te - t
     sd = np.sqrt(SWING.latency_moments(m)[1])
     assert sd == pytest.approx(3.13 * m, rel=0.01)
@@ -227,22 +183,15 @@ def test_latency_zero_mean_stated_variance_one_sided_heavy_tail():
 def test_triangle_cyclic_error_odd_harmonics_on_360_lines():
     fn, levels = SWING_SHAPES['encoder_cyclic_error']
     a = levels[0]['a']
-    t, _, (_, _, _, enc) = _swing(fn, levels[0], 20.0)
-    phi = _stand(t)[0]
+    t, _, (_, _, _, enc) = swing(fn, levels[0], 20.0)
+    phi = stand(t)[0]
     assert np.abs(enc - phi).max() == pytest.approx(a, rel=1e-3)
     x = SWING.LINES * phi + 0.9
-    c = _fit(enc - phi, tuple(f(k * x) for k in (1, 2, 3) for f in (np.sin, np.cos)))
+    c = fit(enc - phi, tuple(f(k * x) for k in (1, 2, 3) for f in (np.sin, np.cos)))
     assert np.hypot(c[0], c[1]) == pytest.approx(8 * a / np.pi ** 2, rel=0.01)
     assert np.hypot(c[2], c[3]) < 1e-2 * a                        # no even harmonics
     assert np.hypot(c[4], c[5]) == pytest.approx(8 * a / (9 * np.pi ** 2), rel=0.02)
 
 
 def test_both_harnesses_take_set_c_by_held_out_c(monkeypatch):
-    static = bench_script.load('validate_diagnosis')
-    seen = []
-    monkeypatch.setattr(static, 'cases', lambda *a, **k: seen.append(a[3]) or [])
-    static.main(['--held-out', 'c'])
-    assert sorted(seen[0]) == sorted(SHAPES)
-    swing = bench_script.load('validate_diagnosis_swing')
-    assert sorted(swing.held_out_shapes(1000.0, 'c')) == sorted(SWING_SHAPES)
-    assert swing.held_out_shapes(1000.0, 'c')['time_delay'][1] == SWING_SHAPES['time_delay'][1]
+    check_harnesses('c', SHAPES, SWING_SHAPES, monkeypatch)

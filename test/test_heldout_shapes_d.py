@@ -3,43 +3,20 @@
 # claim, and both harnesses reach them by --held-out d. THE GENERATORS only, never the diagnosis.
 import bench_script
 from gyro_char.allan.expected import markov_avar
-from gyro_char.allan.kernel import overlapping_avar
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
+                            fit, N_ARW, SIG, stand, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
 
-DT = 0.01
-N_ARW = 2.4 * np.pi / 180.0 / 60.0
-SIG = N_ARW / np.sqrt(DT)
 STATIC = bench_script.load('validate_diagnosis_heldout_d')
 SWING = bench_script.load('validate_diagnosis_swing_heldout_d')
 SHAPES = STATIC.shapes(DT, SIG, N_ARW)
 SWING_SHAPES = SWING.shapes(1000.0)
-AMP, PERIOD = np.deg2rad(20.0), 5.0
-W = 2 * np.pi / PERIOD
-
-
-def _avar(y, m):
-    return overlapping_avar(y, DT, m=m)[1]
-
-
-def _fit(y, cols):
-    return np.linalg.lstsq(np.c_[tuple(cols)], y, rcond=None)[0]
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    assert sorted(SHAPES) == sorted(['internal_lowpass', 'vibration', 'temperature_drift',
-                                     'bias_instability', 'rate_random_walk', 'gauss_markov',
-                                     'quantization', 'resonance'])
-    for name, (fn, levels) in SHAPES.items():
-        weak, strong, edge = [STATIC.detectability(name, p, DT, SIG, N_ARW) for p in levels]
-        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
-        for p in levels:
-            rng = np.random.default_rng(1)
-            x = SIG * rng.standard_normal(20000) + 0.003
-            y = fn(x.copy(), rng, **p)
-            assert y.shape == x.shape and np.all(np.isfinite(y)), name
-            assert not np.allclose(y, x, rtol=0, atol=1e-12), name
+    check_static_set(STATIC, SHAPES)
 
 
 @pytest.mark.parametrize('cutoff', [0.45, 0.7, 0.9975])
@@ -59,7 +36,7 @@ def test_gearbox_mesh_line_and_sidebands_at_mesh_plus_minus_shaft():
     y = fn(np.zeros(100000), np.random.default_rng(3), amplitude=1.0, shaft=2.35, teeth=11)
     t = np.arange(y.size) * DT
     for f, a in ((25.85, 1.0), (25.85 - 2.35, 0.3), (25.85 + 2.35, 0.3)):
-        c = _fit(y, (np.sin(2 * np.pi * f * t), np.cos(2 * np.pi * f * t)))
+        c = fit(y, (np.sin(2 * np.pi * f * t), np.cos(2 * np.pi * f * t)))
         assert np.hypot(*c) == pytest.approx(a, rel=0.01), f
     assert np.abs(y).max() <= 1.6 + 1e-9
     shaft = int(round(1 / 2.35 / DT * 20))                 # 20 turns, 851.06 samples: ~periodic
@@ -92,7 +69,7 @@ def test_fractal_shot_flicker_psd_minus_one_allan_floor_and_bursty():
     assert np.polyfit(np.log(f[sel]), np.log(p[sel]), 1)[0] == pytest.approx(-1.0, abs=0.1)
     assert np.median(p[sel] * np.pi * f[sel]) == pytest.approx(1.0, rel=0.15)   # B^2 / (pi f)
     for m in (100, 1000):
-        adev = np.mean([np.sqrt(_avar(y, [m])[0]) for y in ys])
+        adev = np.mean([np.sqrt(avar(y, [m])[0]) for y in ys])
         assert adev == pytest.approx(0.664, rel=0.15)
     d = np.diff(ys[0])
     assert np.mean(np.abs(d) > 10.0) == pytest.approx(STATIC.SHOT_RATE * DT, rel=0.15)
@@ -106,7 +83,7 @@ def test_lagged_walk_is_smooth_and_diffuses_at_k_squared():
     a = np.exp(-DT / STATIC.WALK_LAG)
     assert np.corrcoef(d[:-1], d[1:])[0, 1] == pytest.approx(a, abs=2e-3)   # C^1: lagged
     m = np.array([100, 80000])
-    av = _avar(y, m)
+    av = avar(y, m)
     tau = m * DT
     expect = tau / 3 - markov_avar(tau, STATIC.WALK_LAG)
     assert av[1] == pytest.approx(expect[1], rel=0.35)
@@ -125,7 +102,7 @@ def test_gamma_ou_skewed_one_sided_exponential_correlation_and_allan():
     assert np.mean(jump > 1e-9) == pytest.approx(lam * DT, rel=0.05)
     assert np.corrcoef(y[:-150], y[150:])[0, 1] == pytest.approx(np.exp(-1), abs=0.03)
     m = int(1.89 * 1.5 / DT)
-    assert _avar(y, [m])[0] == pytest.approx(STATIC.gm_avar(m * DT, 2.0, 1.5), rel=0.1)
+    assert avar(y, [m])[0] == pytest.approx(STATIC.gm_avar(m * DT, 2.0, 1.5), rel=0.1)
 
 
 @pytest.mark.parametrize('c', [0.155, 1.2])
@@ -141,7 +118,7 @@ def test_noise_shaping_second_difference_of_a_bounded_white_error_and_allan(c):
     assert np.abs(e).max() <= step / 2 * (1 + 1e-6)
     assert np.var(e) == pytest.approx(v, rel=0.05)
     assert abs(np.corrcoef(e[:-1], e[1:])[0, 1]) < 0.03
-    ex = _avar(y, [1, 4]) - _avar(x, [1, 4])
+    ex = avar(y, [1, 4]) - avar(x, [1, 4])
     assert ex[0] == pytest.approx(10 * v, rel=0.1)
     assert ex[1] == pytest.approx(6 * v / 16, rel=0.15)
 
@@ -166,29 +143,8 @@ def test_duffing_mode_rms_and_line_shifted_up_by_two_kappa(monkeypatch):
     assert 0.4 < p[band].sum() / p.sum() < 0.75              # about half in the stated band
 
 
-def _stand(t):
-    return AMP * np.sin(W * t), AMP * W * np.cos(W * t)
-
-
-def _swing(fn, p, duration=60.0, stand=_stand):
-    t = np.arange(int(duration * 1000)) * 1e-3
-    angle, rate = stand(t)
-    return t, rate, fn(t, rate.copy(), t.copy(), angle.copy(), stand,
-                       np.random.default_rng(10), **p)
-
-
 def test_swing_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    assert sorted(SWING_SHAPES) == sorted(['time_delay', 'g_sensitivity',
-                                           'scale_factor_nonlinearity', 'scale_factor_asymmetry',
-                                           'timestamp_jitter', 'encoder_cyclic_error'])
-    for name, (fn, levels) in SWING_SHAPES.items():
-        weak, strong, edge = [SWING.detectability(name, p) for p in levels]
-        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
-        for p in levels:
-            t, rate, out = _swing(fn, p, 20.0)
-            assert len(out) == 4 and all(a.shape == t.shape and np.all(np.isfinite(a))
-                                         for a in out), name
-            assert np.all(np.diff(out[2]) > 0) and np.all(np.diff(out[0]) > 0), name
+    check_swing_set(SWING, SWING_SHAPES)
 
 
 @pytest.mark.parametrize('taps', [4, 17, 65])
@@ -196,9 +152,9 @@ def test_decimation_fir_delays_the_motion_by_half_its_length(taps):
     fn, _ = SWING_SHAPES['time_delay']
     h = SWING.fir_taps(taps)
     assert np.allclose(h, h[::-1]) and h.sum() == pytest.approx(1.0)
-    t, rate, (_, g, _, _) = _swing(fn, {'taps': taps})
+    t, rate, (_, g, _, _) = swing(fn, {'taps': taps})
     angle = np.r_[0.0, np.cumsum((g[1:] + g[:-1]) / 2) * 1e-3]
-    c = _fit(angle - _stand(t)[0], (np.sin(W * t), np.cos(W * t), np.ones(t.size), t))
+    c = fit(angle - stand(t)[0], (np.sin(W * t), np.cos(W * t), np.ones(t.size), t))
     assert c[1] == pytest.approx(-AMP * W * (taps - 1) / (2 * SWING.FS_INT), rel=0.02)
 
 
@@ -209,15 +165,15 @@ def test_tilt_hysteresis_is_backlash_and_its_lag_does_not_depend_on_the_period()
     for per in (5.0, 2.5):
         w = 2 * np.pi / per
 
-        def stand(t, w=w):
+        def at(t, w=w):
             return AMP * np.sin(w * t), AMP * w * np.cos(w * t)
-        t, rate, (_, g, _, _) = _swing(fn, levels[1], 20.0, stand)
-        f_y = SWING.G0 * np.sin(stand(t)[0])
+        t, rate, (_, g, _, _) = swing(fn, levels[1], 20.0, at)
+        f_y = SWING.G0 * np.sin(at(t)[0])
         b = (g - rate) / gy
         assert np.abs(b - f_y).max() <= SWING.PLAY * (1 + 1e-9)
         assert np.mean(np.diff(b) == 0.0) > 0.05                  # it holds at turnarounds
         m = t > per
-        c = _fit(b[m], (np.sin(w * t[m]), np.cos(w * t[m])))
+        c = fit(b[m], (np.sin(w * t[m]), np.cos(w * t[m])))
         phases.append(np.arctan2(-c[1], c[0]))
         if per == 5.0:
             z = np.hypot(*c) * gy / (SWING.BenchConfig.from_preset('adis16405').noise[
@@ -229,7 +185,7 @@ def test_tilt_hysteresis_is_backlash_and_its_lag_does_not_depend_on_the_period()
 def test_lock_in_dead_band_square_root_edge_and_third_harmonic():
     fn, _ = SWING_SHAPES['scale_factor_nonlinearity']
     w_l = 0.03
-    t, rate, (_, g, _, _) = _swing(fn, {'w_l': w_l})
+    t, rate, (_, g, _, _) = swing(fn, {'w_l': w_l})
     inside = np.abs(rate) < w_l
     assert inside.any() and np.all(g[inside] == 0.0)
     out = ~inside
@@ -237,7 +193,7 @@ def test_lock_in_dead_band_square_root_edge_and_third_harmonic():
     assert np.all(np.sign(g[out]) == np.sign(rate[out]))
     fast = np.abs(rate) > 0.4
     assert np.allclose(g[fast] - rate[fast], -w_l ** 2 / (2 * rate[fast]), rtol=0.02)
-    c = _fit(g - rate, (np.cos(3 * W * t), np.sin(3 * W * t)))
+    c = fit(g - rate, (np.cos(3 * W * t), np.sin(3 * W * t)))
     s = SWING.BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
     assert np.hypot(*c) / s == pytest.approx(
         SWING.detectability('scale_factor_nonlinearity', {'w_l': w_l}), rel=0.01)
@@ -246,13 +202,13 @@ def test_lock_in_dead_band_square_root_edge_and_third_harmonic():
 def test_schmitt_asymmetry_switches_late_after_each_reversal_and_second_harmonic():
     fn, levels = SWING_SHAPES['scale_factor_asymmetry']
     a = levels[1]['a']
-    t, rate, (_, g, _, _) = _swing(fn, levels[1])
+    t, rate, (_, g, _, _) = swing(fn, levels[1])
     state = np.round((g - rate) / (a * rate), 6)
     big = np.abs(rate) > SWING.SCHMITT
     assert np.all(state[big] == np.sign(rate[big]))
     rising = (np.abs(rate) < SWING.SCHMITT) & (np.gradient(rate) > 0) & (rate > 0)
     assert rising.any() and np.all(state[rising] == -1.0)           # still the old gain
-    c = _fit(g - rate, (np.cos(2 * W * t), np.sin(2 * W * t), np.ones(t.size)))
+    c = fit(g - rate, (np.cos(2 * W * t), np.sin(2 * W * t), np.ones(t.size)))
     s = SWING.BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
     assert np.hypot(c[0], c[1]) / s == pytest.approx(
         SWING.detectability('scale_factor_asymmetry', levels[1]), rel=0.01)
@@ -263,7 +219,7 @@ def test_schmitt_asymmetry_switches_late_after_each_reversal_and_second_harmonic
 def test_sync_sawtooth_stamp_error_period_span_and_zero_mean():
     fn, levels = SWING_SHAPES['timestamp_jitter']
     delta = levels[1]['delta']
-    t, _, (_, _, te, _) = _swing(fn, levels[1])
+    t, _, (_, _, te, _) = swing(fn, levels[1])
     e = te - t
     assert abs(np.mean(e)) < 1e-3 * delta
     assert np.ptp(e) == pytest.approx(delta * SWING.SYNC, rel=1e-2)
@@ -276,9 +232,9 @@ def test_sync_sawtooth_stamp_error_period_span_and_zero_mean():
 def test_per_revolution_disk_error_eccentricity_and_four_lobes():
     fn, levels = SWING_SHAPES['encoder_cyclic_error']
     a = levels[1]['a']
-    t, _, (_, _, _, enc) = _swing(fn, levels[1], 20.0)
-    phi = _stand(t)[0]
-    c = _fit(enc - phi, (np.sin(phi), np.cos(phi), np.sin(4 * phi), np.cos(4 * phi)))
+    t, _, (_, _, _, enc) = swing(fn, levels[1], 20.0)
+    phi = stand(t)[0]
+    c = fit(enc - phi, (np.sin(phi), np.cos(phi), np.sin(4 * phi), np.cos(4 * phi)))
     assert np.hypot(c[0], c[1]) == pytest.approx(2 * a, rel=1e-6)
     assert np.hypot(c[2], c[3]) == pytest.approx(a, rel=1e-6)
     z5 = SWING.detectability('encoder_cyclic_error', levels[1])
@@ -287,12 +243,4 @@ def test_per_revolution_disk_error_eccentricity_and_four_lobes():
 
 
 def test_both_harnesses_take_set_d_by_held_out_d(monkeypatch):
-    static = bench_script.load('validate_diagnosis')
-    seen = []
-    monkeypatch.setattr(static, 'cases', lambda *a, **k: seen.append(a[3]) or [])
-    static.main(['--held-out', 'd'])
-    assert sorted(seen[0]) == sorted(SHAPES)
-    assert seen[0]['quantization'][1] == SHAPES['quantization'][1]
-    swing = bench_script.load('validate_diagnosis_swing')
-    assert sorted(swing.held_out_shapes(1000.0, 'd')) == sorted(SWING_SHAPES)
-    assert swing.held_out_shapes(1000.0, 'd')['time_delay'][1] == SWING_SHAPES['time_delay'][1]
+    check_harnesses('d', SHAPES, SWING_SHAPES, monkeypatch)

@@ -1,0 +1,80 @@
+"""
+What the held-out shape tests (sets C and D) share: the bench numbers and the set checks.
+
+Generators only, never the diagnosis: each set's own file checks its shapes' physics; here
+are the checks every set passes (names, edge levels at z ~ 4, finite output, both harnesses
+reach the set by ``--held-out LETTER``).
+"""
+import bench_script
+from gyro_char.allan.kernel import overlapping_avar
+import numpy as np
+
+DT = 0.01
+N_ARW = 2.4 * np.pi / 180.0 / 60.0
+SIG = N_ARW / np.sqrt(DT)
+AMP, PERIOD = np.deg2rad(20.0), 5.0
+W = 2 * np.pi / PERIOD
+STATIC_NAMES = ['internal_lowpass', 'vibration', 'temperature_drift', 'bias_instability',
+                'rate_random_walk', 'gauss_markov', 'quantization', 'resonance']
+SWING_NAMES = ['time_delay', 'g_sensitivity', 'scale_factor_nonlinearity',
+               'scale_factor_asymmetry', 'timestamp_jitter', 'encoder_cyclic_error']
+
+
+def avar(y, m):
+    return overlapping_avar(y, DT, m=m)[1]
+
+
+def fit(y, cols):
+    return np.linalg.lstsq(np.c_[tuple(cols)], y, rcond=None)[0]
+
+
+def stand(t):
+    return AMP * np.sin(W * t), AMP * W * np.cos(W * t)
+
+
+def swing(fn, p, duration=60.0, stand=stand):
+    t = np.arange(int(duration * 1000)) * 1e-3
+    angle, rate = stand(t)
+    return t, rate, fn(t, rate.copy(), t.copy(), angle.copy(), stand,
+                       np.random.default_rng(10), **p)
+
+
+def check_static_set(module, shapes):
+    """Names, edge z in [3.5, 4.5] below weak < strong, finite output that differs from x."""
+    assert sorted(shapes) == sorted(STATIC_NAMES)
+    for name, (fn, levels) in shapes.items():
+        weak, strong, edge = [module.detectability(name, p, DT, SIG, N_ARW) for p in levels]
+        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
+        for p in levels:
+            rng = np.random.default_rng(1)
+            x = SIG * rng.standard_normal(20000) + 0.003
+            y = fn(x.copy(), rng, **p)
+            assert y.shape == x.shape and np.all(np.isfinite(y)), name
+            assert not np.allclose(y, x, rtol=0, atol=1e-12), name
+
+
+def check_swing_set(module, shapes):
+    """Names, edge z in [3.5, 4.5] below weak < strong, finite increasing-stamp output."""
+    assert sorted(shapes) == sorted(SWING_NAMES)
+    for name, (fn, levels) in shapes.items():
+        weak, strong, edge = [module.detectability(name, p) for p in levels]
+        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
+        for p in levels:
+            t, rate, out = swing(fn, p, 20.0)
+            assert len(out) == 4 and all(a.shape == t.shape and np.all(np.isfinite(a))
+                                         for a in out), name
+            assert np.all(np.diff(out[2]) > 0) and np.all(np.diff(out[0]) > 0), name
+
+
+def check_harnesses(letter, shapes, swing_shapes, monkeypatch):
+    """Both validation harnesses load the set by ``--held-out LETTER`` (no case is run)."""
+    static = bench_script.load('validate_diagnosis')
+    seen = []
+    monkeypatch.setattr(static, 'cases', lambda *a, **k: seen.append(a[3]) or [])
+    static.main(['--held-out', letter])
+    assert sorted(seen[0]) == sorted(shapes)
+    assert seen[0]['quantization'][1] == shapes['quantization'][1]
+    harness = bench_script.load('validate_diagnosis_swing')
+    assert sorted(harness.held_out_shapes(1000.0, letter)) == sorted(swing_shapes)
+    assert (harness.held_out_shapes(1000.0, letter)['time_delay'][1]
+            == swing_shapes['time_delay'][1])
