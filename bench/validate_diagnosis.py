@@ -275,6 +275,9 @@ def report(rows, names) -> None:
     print(f'\nsingle effects: detected {len(det)}/{len(single)}; top-1 (first selected == '
           f'truth) among detected: {len(ok)}/{len(det)} = '
           f'{100.0 * len(ok) / max(len(det), 1):.0f} %')
+    named = [r for r in det if r['selected']]
+    print(f'  where an effect was named: right {len([r for r in named if r in ok])}/{len(named)}'
+          f'; nothing named (gap left unexplained) {len(det) - len(named)}')
     said = [r for r in det if r not in ok and r['ambiguous']
             and r['truth'][0] in r['ambiguous'][0]['effects']]
     print(f'  wrong top-1 but flagged ambiguous with the truth among the candidates: '

@@ -316,6 +316,9 @@ def report(mode, rows, names=None):
         print(f'detected {len(det)}/{len(eff)}; top-1 (first selected == truth) among '
               f'detected {_pct(len(ok), len(det))}; wrong top-1 but flagged ambiguous with '
               f'the truth: {len(flagged)}')
+        named = [r for r in det if r['selected']]
+        print(f'  where an effect was named: right {_pct(sum(r in ok for r in named), len(named))}'
+              f'; nothing named (gap left unexplained) {len(det) - len(named)}')
         confusion(det, names)
         for lv in LEVELS:
             at = [r for r in eff if r.get('level') == [lv]]

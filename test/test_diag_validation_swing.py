@@ -54,11 +54,14 @@ def test_report_counts_top1_ambiguity_and_false_alarms(capsys):
             row(['time_delay'], ['g_sensitivity'], ambiguous=('g_sensitivity', 'time_delay')),
             row(['scale_factor_asymmetry'], ['scale_factor_asymmetry']),
             row(['scale_factor_asymmetry'], [], detected=False),
+            row(['encoder_cyclic_error'], []),
             row([], []), row([], ['vibration'])]
     h.report('single', rows)
     out = capsys.readouterr().out
-    assert 'detected 3/4' in out
-    assert 'top-1 (first selected == truth) among detected 2/3 = 67 %' in out
+    assert 'detected 4/5' in out
+    assert 'top-1 (first selected == truth) among detected 2/4 = 50 %' in out
+    assert 'where an effect was named: right 2/3 = 67 %; nothing named' in out
+    assert 'nothing named (gap left unexplained) 1' in out
     assert 'flagged ambiguous with the truth: 1' in out
     assert 'false alarms on clean records: 1/2' in out
 
