@@ -215,7 +215,8 @@ def psd_avar(psd, tau: np.ndarray, dt: float) -> np.ndarray:
 def interp_cov(m, step: float, depth: float, inc: float, mu_dt: float = 0.0) -> np.ndarray:
     """Autocovariance at lag ``m`` of the interpolation error (angle walk of sd ``inc``)."""
     m = np.asarray(m, float)
-    return sum((a * depth * step) ** 2 / 2 * np.exp(-2 * np.pi ** 2 * h * h * m * inc ** 2 / step ** 2)
+    return sum((a * depth * step) ** 2 / 2
+               * np.exp(-2 * np.pi ** 2 * h * h * m * inc ** 2 / step ** 2)
                * np.cos(2 * np.pi * h * m * mu_dt / step) for h, a, _ in HARM)
 
 

@@ -41,8 +41,8 @@ Levels (``detectability``; 15 min, 1 kHz gyro and encoder, adis16405 preset: A =
   against s / w;
 - bilinear g: the fundamental of g_y (f + 0.6 |f|), f = g sin(A sin wt), by quadrature, against
   s (the |f| part adds a 2f line of 0.6 g_y g A 4 / (3 pi), not counted);
-- self-heating: the 3f line of w k LP(w^2), k (A w)^3 / (4 sqrt(1 + (2 w tau)^2)) (exact: the settled
-  waveform), by quadrature, against s;
+- self-heating: the 3f line of w k LP(w^2), k (A w)^3 / (4 sqrt(1 + (2 w tau)^2)), by
+  quadrature of the settled waveform, against s;
 - after-effect: the 2f line (both phases) of a w LP(sign w), settled, by quadrature, against s;
 - packets, graduation: as set C's latency and set D's disk: a quadratic detector on the angle
   error -phi_dot e(t) with e held white (two-sided PSD (h^2 / 3) M dt sinc^2(f M dt)), and a
