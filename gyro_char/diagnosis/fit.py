@@ -30,9 +30,11 @@ class Param:
     refinement); ``sign`` = -1 searches the magnitude of a negative parameter. A ``choice`` is
     a whole-number structural parameter (a filter's number of stages, a process's order) that
     changes what the other parameters mean: they are fitted anew for each of its values.
-    ``off_at_hi``: the upper bound means "absent" and is stored as 0 (a corner frequency at or
-    above where it could show); the search starts there, so the effect is first fitted
-    without this part, and a criterion counts the parameter as free only when it is not off.
+    ``off_at``: 'hi' or 'lo', that bound means "absent" and is stored as 0 (a corner frequency
+    at or above where it could show; a gyro lag at its shortest, which a long record would
+    still see as a correlation of lag / dt); the search starts there, so the effect is first
+    fitted without this part, and a criterion counts the parameter as free only when it is
+    not off.
     """
 
     name: str
@@ -42,15 +44,15 @@ class Param:
     integer: bool = False
     sign: float = 1.0
     choice: bool = False
-    off_at_hi: bool = False
+    off_at: str = ''
     # Where the search starts (default: the middle of the range); unlike ``EffectSpace.start``
     # still searched. An optional refinement (a gyro lag, a stamp error's correlation time)
     # starts at the end where it is absent, so the main parameter is fitted as without it.
     init: Optional[float] = None
 
     def is_off(self, value: float) -> bool:
-        """Return True if ``value`` is this parameter's "absent" value (``off_at_hi``)."""
-        return self.off_at_hi and value == 0.0
+        """Return True if ``value`` is this parameter's "absent" value (``off_at``)."""
+        return bool(self.off_at) and value == 0.0
 
 
 @dataclass
@@ -103,22 +105,23 @@ class GapObjective:
 
 def _to_u(p: Param, v: float) -> float:
     if p.is_off(v):
-        v = p.hi
+        v = p.hi if p.off_at == 'hi' else p.lo
     v = abs(v)
     return float(np.log(v)) if p.log else float(v)
 
 
 def _start_value(p: Param) -> float:
-    """Where the search of ``p`` starts: ``init``, 0 if absent at ``hi``, else mid-range."""
+    """Where the search of ``p`` starts: ``init``, 0 if it can be absent, else mid-range."""
     if p.init is not None:
         return p.init
-    if p.off_at_hi:
+    if p.off_at:
         return 0.0
     return _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi)))
 
 
 def _from_u(p: Param, u: float) -> float:
-    if p.off_at_hi and u >= _to_u(p, p.hi) - 1e-12:
+    if (p.off_at == 'hi' and u >= _to_u(p, p.hi) - 1e-12
+            or p.off_at == 'lo' and u <= _to_u(p, p.lo) + 1e-12):
         return 0.0
     v = float(np.exp(u)) if p.log else float(u)
     return p.sign * (float(np.round(v)) if p.integer else v)

@@ -171,7 +171,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         # rate random walk).
         'bias_instability': EffectSpace('bias_instability', [
             Param('B', 0.1 * sig_long, b_hi),
-            Param('corner_hz', min(30.0 / length, 0.05 / dt), 0.5 / dt, off_at_hi=True)],
+            Param('corner_hz', min(30.0 / length, 0.05 / dt), 0.5 / dt, off_at='hi')],
             passes=2),
         'rate_random_walk': EffectSpace('rate_random_walk', [
             Param('K', 0.1 * k_long, k_hi)]),
