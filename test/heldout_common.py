@@ -8,6 +8,7 @@ reach the set by ``--held-out LETTER``).
 import bench_script
 from gyro_char.allan.kernel import overlapping_avar
 import numpy as np
+from scipy import signal
 
 DT = 0.01
 N_ARW = 2.4 * np.pi / 180.0 / 60.0
@@ -26,6 +27,14 @@ def avar(y, m):
 
 def fit(y, cols):
     return np.linalg.lstsq(np.c_[tuple(cols)], y, rcond=None)[0]
+
+
+def flicker_band_psd(fn, b=1.0):
+    """Four 2^17-sample records of ``fn`` on zeros, their mean Welch PSD and its 0.05-5 Hz band."""
+    rng = np.random.default_rng(5)
+    ys = np.array([fn(np.zeros(2 ** 17), rng, b=b) for _ in range(4)])
+    f, p = signal.welch(ys, fs=1 / DT, nperseg=2 ** 14)
+    return ys, f, p.mean(axis=0), (f >= 0.05) & (f <= 5.0)
 
 
 def stand(t):

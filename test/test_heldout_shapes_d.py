@@ -4,7 +4,7 @@
 import bench_script
 from gyro_char.allan.expected import markov_avar
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, N_ARW, SIG, stand, swing, W)
+                            fit, flicker_band_psd, N_ARW, SIG, stand, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -61,11 +61,7 @@ def test_draught_steps_mid_record_through_the_thermal_lag():
 
 def test_fractal_shot_flicker_psd_minus_one_allan_floor_and_bursty():
     fn, _ = SHAPES['bias_instability']
-    rng = np.random.default_rng(5)
-    ys = np.array([fn(np.zeros(2 ** 17), rng, b=1.0) for _ in range(4)])
-    f, p = signal.welch(ys, fs=1 / DT, nperseg=2 ** 14)
-    p = p.mean(axis=0)
-    sel = (f >= 0.05) & (f <= 5.0)
+    ys, f, p, sel = flicker_band_psd(fn)
     assert np.polyfit(np.log(f[sel]), np.log(p[sel]), 1)[0] == pytest.approx(-1.0, abs=0.1)
     assert np.median(p[sel] * np.pi * f[sel]) == pytest.approx(1.0, rel=0.15)   # B^2 / (pi f)
     for m in (100, 1000):

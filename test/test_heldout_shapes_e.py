@@ -3,7 +3,7 @@
 # claim, and both harnesses reach them by --held-out e. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, N_ARW, SIG, stand, swing, W)
+                            fit, flicker_band_psd, N_ARW, SIG, stand, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -68,11 +68,7 @@ def test_turnover_is_a_parabola_with_its_vertex_mid_record_and_the_stated_curvat
 
 def test_tilted_flicker_psd_slope_and_level_and_allan_from_its_psd():
     fn, _ = SHAPES['bias_instability']
-    rng = np.random.default_rng(5)
-    ys = np.array([fn(np.zeros(2 ** 17), rng, b=1.0) for _ in range(4)])
-    f, p = signal.welch(ys, fs=1 / DT, nperseg=2 ** 14)
-    p = p.mean(axis=0)
-    sel = (f >= 0.05) & (f <= 5.0)
+    ys, f, p, sel = flicker_band_psd(fn)
     assert np.polyfit(np.log(f[sel]), np.log(p[sel]), 1)[0] == pytest.approx(-0.8, abs=0.06)
     assert np.median(p[sel] / STATIC.flicker_psd(f[sel], 1.0, DT)) == pytest.approx(1, rel=0.1)
     for m in (100, 1000):
