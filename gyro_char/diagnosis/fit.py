@@ -46,8 +46,9 @@ class Param:
     choice: bool = False
     off_at: str = ''
     # Where the search starts (default: the middle of the range); unlike ``EffectSpace.start``
-    # still searched. An optional refinement (a gyro lag, a stamp error's correlation time)
-    # starts at the end where it is absent, so the main parameter is fitted as without it.
+    # still searched. An optional refinement whose bound is as good as absent (a stamp
+    # error's correlation time at 0.05 interval: white) starts there, so the main parameter
+    # is fitted as without it; one whose bound is not (a gyro lag) uses ``off_at``.
     init: Optional[float] = None
 
     def is_off(self, value: float) -> bool:
