@@ -95,7 +95,7 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
                 sign = 1.0 if float(np.einsum('i,i->', resp, dev)) >= 0 else -1.0
                 p = replace(p, sign=sign)
             params.append(p)
-        out.append(EffectSpace(sp.name, params, dict(sp.fixed), dict(sp.start), sp.passes))
+        out.append(replace(sp, params=params, fixed=dict(sp.fixed), start=dict(sp.start)))
     return out
 
 
@@ -134,8 +134,8 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
     lines = Param('lines', max(1.0, np.floor(0.99 * start)), np.ceil(1.01 * start),
                   integer=True)
     fixed = {k: v for k, v in sp.fixed.items() if k != 'lines'}
-    return EffectSpace(sp.name, list(sp.params) + [lines], fixed, {**sp.start, 'lines': start},
-                       sp.passes)
+    return replace(sp, params=list(sp.params) + [lines], fixed=fixed,
+                   start={**sp.start, 'lines': start})
 
 
 def unresolved_pairs(bases: Sequence[SwingBaseline], rel: float = 0.1) -> frozenset:
