@@ -242,6 +242,52 @@ def test_scale_factor_fifth_order_term_harmonics():
     assert abs(c[0]) < 1e-4 * k5 * big_w ** 5 and abs(c[3]) < 1e-4 * k5 * big_w ** 5
 
 
+def _one_pole_gain(tau, dt, w):
+    """Complex gain of the backward-Euler one-pole at angular frequency ``w``."""
+    a = tau / (tau + dt)
+    return (1.0 - a) / (1.0 - a * np.exp(-1j * w * dt))
+
+
+def test_self_heating_cubic_puts_its_lines_through_the_thermal_lag():
+    # w = W cos: k3 w LP(w^2) = k3 W^3 / 2 cos + k3 W^3 / 4 Re[H(2w) (e^{i w t} + e^{3 i w t})]
+    cfg = _swing_cfg()
+    k3, tau = 0.2, 0.4
+    run = simulate_swing(cfg, duration=20.0, seed=11, channels=['gyro_x'],
+                         effects=[f'scale_factor_nonlinearity:k2=0,k3={k3},tau_s={tau}'])
+    w = 2 * np.pi / cfg.stand.period_s
+    big_w = cfg.stand.amplitude * w
+    h = _one_pole_gain(tau, float(np.median(np.diff(run.imu.t))), 2 * w)
+    assert abs(h) < 0.75         # the lag matters at 2f
+    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
+    line = k3 * big_w ** 3 / 4
+    assert c[1] == pytest.approx(big_w + 2 * line + line * h.real, rel=1e-4)
+    assert c[2] == pytest.approx(-line * h.imag, rel=1e-2)
+    assert c[5] == pytest.approx(line * h.real, rel=1e-2)
+    assert c[6] == pytest.approx(-line * h.imag, rel=1e-2)
+    assert EFFECTS['scale_factor_nonlinearity'](k3=k3).describe()['params'].keys() == {
+        'k2', 'k3', 'k5'}    # tau_s at 0 left out of truth.json, as before it existed
+
+
+def test_relaxing_asymmetry_shifts_the_second_harmonic_and_keeps_f_clean():
+    # a w LP(sign w), sign(cos) = sum over odd m of b_m cos(m w t): only even lines;
+    # 2f from m = 1 and 3: (a W / 2) (b_1 H(w) + b_3 H(3 w)), DC (a W / 2) Re b_1 H(w).
+    cfg = _swing_cfg()
+    a, tau = 0.01, 0.3
+    run = simulate_swing(cfg, duration=20.0, seed=12, channels=['gyro_x'],
+                         effects=[f'scale_factor_asymmetry:a={a},tau_s={tau}'])
+    w = 2 * np.pi / cfg.stand.period_s
+    big_w = cfg.stand.amplitude * w
+    dt = float(np.median(np.diff(run.imu.t)))
+    b1, b3 = 4 / np.pi, -4 / (3 * np.pi)
+    h1, h3 = _one_pole_gain(tau, dt, w), _one_pole_gain(tau, dt, 3 * w)
+    two_f = 0.5 * a * big_w * (b1 * h1 + b3 * h3)
+    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
+    assert c[0] == pytest.approx(0.5 * a * big_w * (b1 * h1).real, rel=1e-2)
+    assert c[3] == pytest.approx(two_f.real, rel=2e-2)
+    assert c[4] == pytest.approx(-two_f.imag, rel=2e-2)
+    assert abs(c[2]) < 1e-3 * a * big_w and c[1] == pytest.approx(big_w, rel=1e-5)
+
+
 def test_scale_factor_asymmetry_dc_and_second_harmonic():
     cfg = _swing_cfg()
     a = 0.01

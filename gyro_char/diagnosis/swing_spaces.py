@@ -14,6 +14,7 @@ from gyro_char.diagnosis.swing_expect import LAG_GRID
 import numpy as np
 
 G0 = 9.80665
+MEMORY = (0.005, 1.0)     # scale-factor memory searched: from none, 0.5 % .. 1 period
 
 
 def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
@@ -37,12 +38,19 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         EffectSpace('g_sensitivity', [Param('gy', 0.5 * q * w / (G0 * base.amplitude),
                                             200.0 * q * w / (G0 * base.amplitude))]),
         # Up to 3000 record-averaged noise sds at the peak rate: a saturation 30 % down at
-        # twice the peak rate (k3 ~ -0.4 s^2/rad^2 at 0.44 rad/s) is inside.
+        # twice the peak rate (k3 ~ -0.4 s^2/rad^2 at 0.44 rad/s) is inside. Both scale-factor
+        # shapes may have a memory (``tau_s``: self-heating of the cubic, a relaxing switch),
+        # fitted after the memoryless shape, from none up to a period (longer: the memory
+        # only averages, a constant scale-factor error the baseline already holds).
         EffectSpace('scale_factor_nonlinearity', [
             Param('k2', 0.03 * sig / rate ** 2, 3000.0 * sig / rate ** 2),
-            Param('k3', 0.03 * sig / rate ** 3, 3000.0 * sig / rate ** 3)]),
-        EffectSpace('scale_factor_asymmetry', [Param('a', 0.03 * sig / rate,
-                                                     300.0 * sig / rate)]),
+            Param('k3', 0.03 * sig / rate ** 3, 3000.0 * sig / rate ** 3),
+            Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s,
+                  off_at='lo')]),
+        EffectSpace('scale_factor_asymmetry', [
+            Param('a', 0.03 * sig / rate, 300.0 * sig / rate),
+            Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s,
+                  off_at='lo')]),
         # Line count: started by ``signs`` at the record's line-spectrum peak (exact to a
         # fraction of a line); its range is +-1 % around that start (a whole number).
         EffectSpace('encoder_cyclic_error', [Param('a1', 0.1 * base.encoder_sigma + 1e-9,

@@ -42,6 +42,7 @@ import zlib
 
 from gyro_char.errors import InputError
 import numpy as np
+from scipy import signal
 
 
 Array = np.ndarray
@@ -146,6 +147,34 @@ class Effect:
 
 
 EFFECTS: Dict[str, type] = {}
+
+
+def one_pole(x: np.ndarray, lag_s: float, dt: float, start: str = 'first') -> np.ndarray:
+    """
+    First-order lag of time constant ``lag_s`` along the last axis, started in steady state.
+
+    Backward-Euler form y[n] = a y[n-1] + (1 - a) x[n], a = lag / (lag + dt): its group delay
+    at low frequency is exactly ``lag_s`` (the exponential form's is lag - dt / 2 + ...).
+    ``start``: 'first', settled on the first sample (a signal that was there before the run);
+    'periodic', in the state the run ends in (a stand that swung before the record: exact
+    for whole periods of a periodic input, no warm-up it never had). ``lag_s`` 0: ``x``.
+    """
+    if lag_s <= 0.0:
+        return x
+    a = lag_s / (lag_s + dt)
+    b, den = np.array([1.0 - a]), np.array([1.0, -a])
+    zi = signal.lfilter_zi(b, den) * x[..., :1]
+    if start == 'periodic':
+        zi = signal.lfilter(b, den, x, axis=-1, zi=zi)[1]
+    return signal.lfilter(b, den, x, axis=-1, zi=zi)[0]
+
+
+def describe_without(effect: Effect, optional: str) -> dict:
+    """``describe()`` leaving out an optional parameter at its default 0 (earlier truth.json)."""
+    out = Effect.describe(effect)
+    if not out['params'][optional]:
+        del out['params'][optional]
+    return out
 
 
 def register(cls: type) -> type:

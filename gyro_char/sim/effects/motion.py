@@ -7,13 +7,13 @@ harmonics or phase-locked residuals rather than a change of the reported coeffic
 """
 from gyro_char.errors import InputError
 from gyro_char.sim.config import AXES
-from gyro_char.sim.effects.base import Effect, register
+from gyro_char.sim.effects.base import describe_without, Effect, one_pole, register
 import numpy as np
 
 
 @register
 class ScaleFactorNonlinearity(Effect):
-    """Quadratic, cubic and fifth-order terms of the rate response."""
+    """Quadratic, cubic and fifth-order terms of the rate response; the cubic with memory."""
 
     name = 'scale_factor_nonlinearity'
     summary = 'rate response with quadratic / cubic / fifth-order terms'
@@ -23,29 +23,56 @@ class ScaleFactorNonlinearity(Effect):
                'scale-factor error 3 k3 W^2 / 4) and a 3f line k3 W^3 / 4; k5 gives '
                '10 k5 W^5 / 16 at f, 5 k5 W^5 / 16 at 3f and k5 W^5 / 16 at 5f. A saturation '
                'or a range switch bends the response beyond a cube: at one peak rate k5 looks '
-               'like k3, at two peak rates their lines grow as W^5 and W^3.')
+               'like k3, at two peak rates their lines grow as W^5 and W^3. tau_s > 0 gives '
+               'the cubic a memory, as a torquer heated by its own current: the scale factor '
+               'follows the power (omega^2) through a thermal lag, omega k3 LP(omega^2); part '
+               'of the 3f line and of the change at f then turns into quadrature.')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
               'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient'),
-              'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient')}
+              'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient'),
+              'tau_s': (0.0, 's', 'thermal lag of the cubic term (0: memoryless)')}
+
+    def check(self):
+        if self.tau_s < 0:
+            raise InputError('scale_factor_nonlinearity: tau_s must be >= 0')
+
+    def describe(self):
+        return describe_without(self, 'tau_s')
 
     def sensor(self, ctx, gyro, accel):
         w = ctx.true_rate
         w2 = w * w
-        return gyro + w2 * (self.k2 + w * (self.k3 + self.k5 * w2)), accel
+        heat = one_pole(w2, self.tau_s, ctx.dt_internal, start='periodic')
+        return gyro + w2 * (self.k2 + self.k5 * w * w2) + self.k3 * w * heat, accel
 
 
 @register
 class ScaleFactorAsymmetry(Effect):
-    """Different scale factors for positive and negative rates."""
+    """Different scale factors for positive and negative rates, switched at once or relaxing."""
 
     name = 'scale_factor_asymmetry'
     summary = 'scale factor (1 + a) for positive, (1 - a) for negative rates'
     physics = ('omega_out += a |omega|. For omega = W cos(wt): a DC offset 2 a W / pi and '
-               'even harmonics (2f: 4 a W / (3 pi)); no change at f.')
-    PARAMS = {'a': (1.0e-3, '1', 'half the difference of the two scale factors')}
+               'even harmonics (2f: 4 a W / (3 pi)); no change at f. tau_s > 0: the gain '
+               'relaxes to its new side after each reversal (a direction memory, as the '
+               'after-effect of a torquer magnet), omega_out += a omega LP(sign omega): the '
+               '2f line turns partly into quadrature and falls; still no line at f.')
+    PARAMS = {'a': (1.0e-3, '1', 'half the difference of the two scale factors'),
+              'tau_s': (0.0, 's', 'relaxation time of the switch after a reversal (0: at once)')}
+
+    def check(self):
+        if self.tau_s < 0:
+            raise InputError('scale_factor_asymmetry: tau_s must be >= 0')
+
+    def describe(self):
+        return describe_without(self, 'tau_s')
 
     def sensor(self, ctx, gyro, accel):
-        return gyro + self.a * np.abs(ctx.true_rate), accel
+        w = ctx.true_rate
+        if self.tau_s <= 0.0:
+            return gyro + self.a * np.abs(w), accel
+        side = one_pole(np.sign(w), self.tau_s, ctx.dt_internal, start='periodic')
+        return gyro + self.a * w * side, accel
 
 
 @register

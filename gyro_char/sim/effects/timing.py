@@ -9,30 +9,9 @@ correlated in time (``tau_s``: a first-order Gauss-Markov stamp error).
 """
 from gyro_char.errors import InputError
 from gyro_char.sim.chain import JITTER_CLIP
-from gyro_char.sim.effects.base import Effect, register
+from gyro_char.sim.effects.base import describe_without, Effect, one_pole, register
 import numpy as np
 from scipy import signal
-
-
-def one_pole(x: np.ndarray, lag_s: float, dt: float) -> np.ndarray:
-    """
-    First-order lag of time constant ``lag_s`` along the last axis, started in steady state.
-
-    Backward-Euler form y[n] = a y[n-1] + (1 - a) x[n], a = lag / (lag + dt): its group delay
-    at low frequency is exactly ``lag_s`` (the exponential form's is lag - dt / 2 + ...).
-    """
-    a = lag_s / (lag_s + dt)
-    b, den = np.array([1.0 - a]), np.array([1.0, -a])
-    zi = signal.lfilter_zi(b, den) * x[..., :1]
-    return signal.lfilter(b, den, x, axis=-1, zi=zi)[0]
-
-
-def describe_without(effect: Effect, optional: str) -> dict:
-    """``describe()`` leaving out an optional parameter at its default 0 (earlier truth.json)."""
-    out = Effect.describe(effect)
-    if not out['params'][optional]:
-        del out['params'][optional]
-    return out
 
 
 @register
