@@ -268,6 +268,30 @@ def test_self_heating_cubic_puts_its_lines_through_the_thermal_lag():
         'k2', 'k3', 'k5'}    # tau_s at 0 left out of truth.json, as before it existed
 
 
+def test_lock_in_rate_follows_the_adler_law_in_every_odd_line():
+    # omega_out = sign(w) sqrt(w^2 - L^2) outside |w| < L, 0 inside: Fourier lines by quadrature
+    from scipy import integrate
+    cfg = _swing_cfg()
+    lock = 0.08
+    run = simulate_swing(cfg, duration=20.0, seed=13, channels=['gyro_x'],
+                         effects=[f'scale_factor_nonlinearity:k2=0,lock_in={lock}'])
+    w = 2 * np.pi / cfg.stand.period_s
+    big_w = cfg.stand.amplitude * w
+
+    def law(th):
+        x = big_w * np.cos(th)
+        return np.sign(x) * np.sqrt(max(x * x - lock * lock, 0.0))
+
+    edge = np.arccos(lock / big_w)
+    cuts = [edge, np.pi - edge, np.pi + edge, 2 * np.pi - edge]
+    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 5)
+    for h, k in ((1, 1), (3, 5), (5, 9)):
+        want = integrate.quad(lambda th: law(th) * np.cos(h * th), 0, 2 * np.pi, points=cuts,
+                              limit=200)[0] / np.pi
+        assert c[k] == pytest.approx(want, rel=2e-3, abs=1e-4 * big_w)
+    assert abs(c[5]) > 0.01 * big_w and abs(c[0]) < 1e-4 * big_w and abs(c[3]) < 1e-4 * big_w
+
+
 def test_relaxing_asymmetry_shifts_the_second_harmonic_and_keeps_f_clean():
     # a w LP(sign w), sign(cos) = sum over odd m of b_m cos(m w t): only even lines;
     # 2f from m = 1 and 3: (a W / 2) (b_1 H(w) + b_3 H(3 w)), DC (a W / 2) Re b_1 H(w).

@@ -25,7 +25,7 @@ from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.swing_baseline import PRESET, static_noise, SwingBaseline
 from gyro_char.diagnosis.swing_expect import EffectParts, lag_gain, pseudo_twin
 from gyro_char.diagnosis.swing_obs import (
-    layout, raw_parts, residuals, swing_observables, UNITS)
+    layout, raw_parts, residuals, swing_observables, unlocked_psd, UNITS)
 from gyro_char.diagnosis.swing_spaces import signs, swing_spaces, unresolved_pairs
 from gyro_char.diagnosis.twins import output_step, twin_effects
 from gyro_char.errors import InputError
@@ -137,8 +137,9 @@ def _obs(imu: Recording, encoder: Recording, base: SwingBaseline, ranges: dict) 
                              encoder.channels[ENCODER_CHANNEL], base.period_s, ranges)
 
 
-def _white(o: dict) -> np.ndarray:
-    return 10 ** o['residual_psd']
+def _residuals(imu: Recording, encoder: Recording, base: SwingBaseline):
+    return residuals(imu.t, imu.channels[f'gyro_{base.axis}'], encoder.t,
+                     encoder.channels[ENCODER_CHANNEL], base.period_s)
 
 
 def encoder_white_sigma(base: SwingBaseline, cfg: BenchConfig) -> float:
@@ -153,7 +154,7 @@ def encoder_white_sigma(base: SwingBaseline, cfg: BenchConfig) -> float:
     return float(np.sqrt(max(base.encoder_sigma ** 2 - other, 0.0)))
 
 
-def calibrate_n(base: SwingBaseline, real: dict, ranges: dict,
+def calibrate_n(base: SwingBaseline, imu: Recording, encoder: Recording, ranges: dict,
                 seeds: Sequence[int] = (901, 902, 903)) -> SwingBaseline:
     """
     Rescale N so that the twins' residual PSD in the gyro band matches the record's.
@@ -164,13 +165,18 @@ def calibrate_n(base: SwingBaseline, real: dict, ranges: dict,
     whole 15-min 1 kHz run the upper bins are the precise ones (a few hundred Welch
     frequencies each), and the lower half's few, noisy ratios left N ~1 % high there, which
     read as a -3 to -7 sigma deficit of the record in the upper bins and as a lag-1 increment
-    correlation 9 sigma off on clean runs. The median of the
-    bins' record / twin ratios, not a ratio of band means: a strong odd nonlinearity puts its
-    5f, 7f... lines into the lowest bins (a 2.5 s swing's 5f is at 2 Hz), and a band mean then
-    reads them as white noise (measured: N 300x too high on the tanh-saturation runs).
+    correlation 9 sigma off on clean runs. The median of the bins' record / twin ratios, not
+    a ratio of band means, and on the residual rate less its part locked to the swing phase
+    (``unlocked_psd``): a strong odd nonlinearity puts its 5f, 7f... lines into the lowest
+    bins (measured: N 300x too high from a band mean on the tanh-saturation runs), and a
+    dead band's sharp turning points into every bin (measured: N 10-14 % high from the
+    median on a lock-in record before the phase mean came out).
     """
-    sims = [_white(_obs(*simulate_twin(base, [], s), base, ranges)) for s in seeds]
-    ratio = float(np.median(_white(real) / np.mean(sims, axis=0)))
+    def psd(rec_imu, rec_enc):
+        return unlocked_psd(_residuals(rec_imu, rec_enc, base), ranges)
+
+    sims = [psd(*simulate_twin(base, [], s)) for s in seeds]
+    ratio = float(np.median(psd(imu, encoder) / np.mean(sims, axis=0)))
     return replace(base, N=base.N * float(np.sqrt(ratio)))
 
 
@@ -314,8 +320,8 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     ranges = [layout(len(imu), b.dt, b.period_s) for (imu, _, _), b in zip(records, bases)]
     reals = [_obs(imu, enc, b, r) for (imu, enc, _), b, r in zip(records, bases, ranges)]
     if fitted:
-        bases = [calibrate_n(calibrate_encoder(b, enc), real, r)
-                 for b, (_, enc, _), real, r in zip(bases, records, reals, ranges)]
+        bases = [calibrate_n(calibrate_encoder(b, enc), imu, enc, r)
+                 for b, (imu, enc, _), r in zip(bases, records, ranges)]
     # The rate dependence of the scale factor: each further record's scale against the first's.
     scales = [record_scale(imu, enc, b.axis) for (imu, enc, _), b in zip(records, bases)]
     for i in range(1, len(records)):
@@ -376,8 +382,7 @@ def expected_twins(bases: Sequence[SwingBaseline], ranges: Sequence[dict], shift
         if (i, seed) not in noise:
             b = bases[i]
             imu, enc = simulate_twin(b, [], seed + 7919 * i)
-            raw = raw_parts(residuals(imu.t, imu.channels[f'gyro_{b.axis}'], enc.t,
-                                      enc.channels[ENCODER_CHANNEL], b.period_s), ranges[i])
+            raw = raw_parts(_residuals(imu, enc, b), ranges[i])
             raw['scale'] = record_scale(imu, enc, b.axis) if shift else 0.0
             noise[(i, seed)] = raw
         return noise[(i, seed)]

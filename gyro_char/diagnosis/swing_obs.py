@@ -256,6 +256,32 @@ def residuals(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarra
                      w * float(np.hypot(ce[0], ce[1])))
 
 
+def band_psd(rate: np.ndarray, dt: float, ranges: dict) -> np.ndarray:
+    """Welch PSD of a residual rate, averaged in the ``residual_psd`` bands."""
+    f, p = signal.welch(rate, fs=1.0 / dt, nperseg=min(2048, rate.size // 8))
+    return np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
+                     else np.interp(0.5 * (a + b), f, p) for a, b in ranges['residual_psd']])
+
+
+def unlocked_psd(res: Residuals, ranges: dict) -> np.ndarray:
+    """
+    ``residual_psd`` of the residual rate less its mean at each phase of the swing.
+
+    That mean (one bin per sample of a period, over all the periods) is what the motion and
+    any effect locked to it leave every period alike; the rest is the sensors' noise, less
+    1 / (number of periods) of its power, on record and twins alike. The baseline's N is
+    pinned on it (``swing.calibrate_n``): a sharp residual at every turning point (a dead
+    band) spreads over all Welch bins and would otherwise be read as gyro noise.
+    """
+    rate = np.diff(res.r) / res.dt
+    th = 0.5 * (res.th[1:] + res.th[:-1])
+    step = float(np.median(np.diff(res.th)))
+    per = max(int(round(2.0 * np.pi / max(step, 1e-12))), 1)
+    k = np.minimum((np.mod(th, 2.0 * np.pi) / (2.0 * np.pi) * per).astype(int), per - 1)
+    mean = np.bincount(k, rate, minlength=per) / np.maximum(np.bincount(k, minlength=per), 1)
+    return band_psd(rate - mean[k], res.dt, ranges)
+
+
 def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
               r_e: Optional[np.ndarray] = None) -> dict:
     """
@@ -272,9 +298,7 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     th, ts = res.th, res.ts
     h = _solve([np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
                 np.cos(3 * th), np.ones_like(ts), ts, ts * ts], r)
-    f, p = signal.welch(np.diff(r) / res.dt, fs=1.0 / res.dt, nperseg=min(2048, r.size // 8))
-    psd = np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
-                    else np.interp(0.5 * (a + b), f, p) for a, b in ranges['residual_psd']])
+    psd = band_psd(np.diff(r) / res.dt, res.dt, ranges)
     # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
     # large, deterministic, and the harmonic blocks' business - must not pass for noise here.
     hp_e = highpass(r_e, int(round(HP_SECONDS / res.dt_e)))

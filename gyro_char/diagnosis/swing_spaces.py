@@ -15,6 +15,7 @@ import numpy as np
 
 G0 = 9.80665
 MEMORY = (0.005, 1.0)     # scale-factor memory searched: from none, 0.5 % .. 1 period
+LOCK_IN = (3e-4, 0.3)     # lock-in rate searched: from none, fractions of the peak rate
 
 
 def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
@@ -41,12 +42,14 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         # twice the peak rate (k3 ~ -0.4 s^2/rad^2 at 0.44 rad/s) is inside. Both scale-factor
         # shapes may have a memory (``tau_s``: self-heating of the cubic, a relaxing switch),
         # fitted after the memoryless shape, from none up to a period (longer: the memory
-        # only averages, a constant scale-factor error the baseline already holds).
+        # only averages, a constant scale-factor error the baseline already holds). The
+        # lock-in rate last, from none up to a third of the peak rate.
         EffectSpace('scale_factor_nonlinearity', [
             Param('k2', 0.03 * sig / rate ** 2, 3000.0 * sig / rate ** 2),
             Param('k3', 0.03 * sig / rate ** 3, 3000.0 * sig / rate ** 3),
             Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s,
-                  off_at='lo')]),
+                  off_at='lo'),
+            Param('lock_in', LOCK_IN[0] * rate, LOCK_IN[1] * rate, off_at='lo')]),
         EffectSpace('scale_factor_asymmetry', [
             Param('a', 0.03 * sig / rate, 300.0 * sig / rate),
             Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s,

@@ -169,11 +169,12 @@ def one_pole(x: np.ndarray, lag_s: float, dt: float, start: str = 'first') -> np
     return signal.lfilter(b, den, x, axis=-1, zi=zi)[0]
 
 
-def describe_without(effect: Effect, optional: str) -> dict:
-    """``describe()`` leaving out an optional parameter at its default 0 (earlier truth.json)."""
+def describe_without(effect: Effect, *optional: str) -> dict:
+    """``describe()`` leaving out optional parameters at their default 0 (earlier truth.json)."""
     out = Effect.describe(effect)
-    if not out['params'][optional]:
-        del out['params'][optional]
+    for name in optional:
+        if not out['params'][name]:
+            del out['params'][name]
     return out
 
 

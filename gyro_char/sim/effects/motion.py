@@ -26,24 +26,32 @@ class ScaleFactorNonlinearity(Effect):
                'like k3, at two peak rates their lines grow as W^5 and W^3. tau_s > 0 gives '
                'the cubic a memory, as a torquer heated by its own current: the scale factor '
                'follows the power (omega^2) through a thermal lag, omega k3 LP(omega^2); part '
-               'of the 3f line and of the change at f then turns into quadrature.')
+               'of the 3f line and of the change at f then turns into quadrature. '
+               'lock_in > 0: the response collapses near zero rate, as a ring laser locks in '
+               '(IEEE 528 dead band / lock-in rate; the averaged Adler law): omega_out = '
+               'sign(omega) sqrt(omega^2 - lock_in^2) outside the band, 0 inside; odd lines '
+               'that a cubic cannot follow, made at the turning points.')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
               'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient'),
               'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient'),
-              'tau_s': (0.0, 's', 'thermal lag of the cubic term (0: memoryless)')}
+              'tau_s': (0.0, 's', 'thermal lag of the cubic term (0: memoryless)'),
+              'lock_in': (0.0, 'rad/s', 'lock-in rate: no output below it (0: none)')}
 
     def check(self):
-        if self.tau_s < 0:
-            raise InputError('scale_factor_nonlinearity: tau_s must be >= 0')
+        if self.tau_s < 0 or self.lock_in < 0:
+            raise InputError('scale_factor_nonlinearity: tau_s and lock_in must be >= 0')
 
     def describe(self):
-        return describe_without(self, 'tau_s')
+        return describe_without(self, 'tau_s', 'lock_in')
 
     def sensor(self, ctx, gyro, accel):
         w = ctx.true_rate
         w2 = w * w
         heat = one_pole(w2, self.tau_s, ctx.dt_internal, start='periodic')
-        return gyro + w2 * (self.k2 + self.k5 * w * w2) + self.k3 * w * heat, accel
+        gyro = gyro + w2 * (self.k2 + self.k5 * w * w2) + self.k3 * w * heat
+        if self.lock_in > 0.0:
+            gyro = gyro + np.sign(w) * np.sqrt(np.maximum(w2 - self.lock_in ** 2, 0.0)) - w
+        return gyro, accel
 
 
 @register
