@@ -25,7 +25,7 @@ from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.swing_baseline import PRESET, static_noise, SwingBaseline
 from gyro_char.diagnosis.swing_expect import EffectParts, lag_gain, pseudo_twin
 from gyro_char.diagnosis.swing_obs import (
-    layout, raw_parts, residuals, swing_observables, unlocked_psd, UNITS)
+    layout, raw_parts, residuals, swing_observables, UNITS, unlocked_psd)
 from gyro_char.diagnosis.swing_spaces import signs, swing_spaces, unresolved_pairs
 from gyro_char.diagnosis.twins import output_step, twin_effects
 from gyro_char.errors import InputError
