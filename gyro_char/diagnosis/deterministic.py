@@ -62,7 +62,7 @@ def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
     if blk > 1 and ref.size:
         small = m < blk
         av[small] = av[ref[0]] * (m[small] / blk) ** 2
-    p = _det_welch(spec, g, slope)
+    p = _det_welch(spec, g, slope, d)
     d1 = float(np.mean(np.diff(d) ** 2))
     r0 = float(np.dot(d, d)) / g.n
     acov = r0 - 0.5 * d1 * np.arange(lags + 1) ** 2
@@ -71,8 +71,15 @@ def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
     return Deterministic(av, p, acov, drift)
 
 
-def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
-    """Welch PSD of the detrended warm-up: per segment s, sum_i a_is e_i(j) - slope j."""
+def _det_welch(spec: ModelSpectrum, g, slope: float, d: np.ndarray) -> np.ndarray:
+    """
+    Welch PSD of the detrended warm-up ``d``: per segment s, sum_i a_is e_i(j) - slope j.
+
+    A transient that starts mid-record is not one exponential in the segment it starts in:
+    its Welch PSD is taken from ``d`` itself (one Welch transform of the record's length).
+    """
+    if any(t0 > 0.0 for _, _, t0 in spec.warmups):
+        return obs.welch_psd(d, g.dt)[1]
     L = g.nps
     step = L // 2
     nseg = (g.n - L) // step + 1
@@ -80,7 +87,7 @@ def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
     j = np.arange(L, dtype=np.float64)
     t0 = np.arange(nseg) * step * g.dt
     coef, shapes = [], []
-    for amp, tau in spec.warmups:
+    for amp, tau, _ in spec.warmups:
         coef.append(spec.deterministic_at(t0, amp, tau))
         shapes.append(np.exp(-j * g.dt / tau))
     coef.append(np.full(nseg, -slope))

@@ -10,7 +10,7 @@ around the best grid point. Effects here have one to three parameters, so this i
 unlike a gradient method, does not get stuck on the flat region where an effect is too small
 to matter.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 from gyro_char.diagnosis import gap as diag_gap
@@ -67,6 +67,9 @@ class EffectSpace:
     start: dict = field(default_factory=dict)
     # Coordinate passes at least (2 where one parameter shifts another's best value).
     passes: int = 1
+    # Other starts of the same search (another sign, another data-driven start): each is
+    # fitted too and the best kept, as for a ``choice`` parameter.
+    alternatives: tuple = ()
 
 
 @dataclass
@@ -140,8 +143,14 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
     position in ``selected`` where the effect goes (default: last); an effect's random numbers
     follow its position, so a refit in place keeps the common random numbers.
     Cost: about ``passes * len(params) * (grid + refine)`` evaluations of the objective, times
-    the number of values of a ``choice`` parameter (with ``near``, the choice is kept).
+    the number of values of a ``choice`` parameter (with ``near``, the choice is kept) and
+    the number of ``alternatives`` plus one.
     """
+    if space.alternatives:
+        fits = [fit_effect(objective, selected, sp, grid=grid, refine=refine, passes=passes,
+                           near=near, at=at)
+                for sp in (replace(space, alternatives=()),) + tuple(space.alternatives)]
+        return min(fits, key=lambda f: f[1].gap)
     choices = [p for p in space.params if p.choice]
     if choices:
         p = choices[0]

@@ -103,7 +103,8 @@ class ModelSpectrum:
     output_white: float = 0.0            # two-sided white PSD added at the output
     angle_var: float = 0.0               # white angle error variance (rad^2), at the output
     lines: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, mean square)
-    warmups: List[Tuple[float, float]] = field(default_factory=list)  # (amplitude, tau_s)
+    # (amplitude, tau_s, t0_s): a transient from power-on (t0 0) or from mid-record.
+    warmups: List[Tuple[float, float, float]] = field(default_factory=list)
     peaks: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, width) to resolve
 
     def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
@@ -166,14 +167,18 @@ class ModelSpectrum:
         """Return the warm-up terms at the ``n`` output sample instants (zeros without warm-up)."""
         t = np.arange(n) * self.dt
         out = np.zeros(n)
-        for amp, tau in self.warmups:
-            out += self.deterministic_at(t, amp, tau)
+        for amp, tau, t0 in self.warmups:
+            out += self.deterministic_at(t, amp, tau, t0)
         return out
 
-    def deterministic_at(self, t: np.ndarray, amp: float, tau: float) -> np.ndarray:
+    def deterministic_at(self, t: np.ndarray, amp: float, tau: float,
+                         t0: float = 0.0) -> np.ndarray:
         """One warm-up term at output times ``t`` (decimation phase and filter delay included)."""
         shift = (self.decimation - 1) * self.dt_i - 0.5 * (self.taps - 1) * self.stages * self.dt_i
-        return amp * np.exp(-(np.asarray(t) + shift) / tau)
+        since = np.asarray(t) + shift
+        if t0 > 0.0:
+            since = np.maximum(since - t0, 0.0)
+        return amp * np.exp(-since / tau)
 
 
 def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> ModelSpectrum:
@@ -211,5 +216,5 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
             power = 0.5 * p['amplitude'] ** 2 * float(spec.h2(np.array([fa]))[0])
             spec.lines.append((float(fold(fa, 1.0 / dt)), power))
         elif name == 'temperature_drift':
-            spec.warmups.append((p['amplitude'], p['tau_s']))
+            spec.warmups.append((p['amplitude'], p['tau_s'], p.get('t0_s', 0.0)))
     return spec

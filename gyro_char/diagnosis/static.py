@@ -152,6 +152,13 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
+    # A transient that started mid-record: from the record's change point (the extremum of
+    # the detrended cumulative sum), with the sign of the mean before it against after it
+    # (the early-against-late sign reads a step at 40 % of the record backwards: the
+    # detrending line tilts the early part the other way).
+    cum = np.cumsum(y)
+    k = int(np.argmax(np.abs(cum)))
+    onset, step_sign = k * dt, (1.0 if cum[k] >= 0.0 else -1.0)
     k_long = sig_long / np.sqrt(tau_max)
     # Upper bounds from the record itself as well: on a long record a strong random walk or
     # flicker floor can sit far above 30x the white noise's Allan deviation at the longest tau.
@@ -183,9 +190,8 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'quantization': EffectSpace('quantization', [
             Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt)),
             Param('dither', 0, 1, integer=True, choice=True)]),
-        'temperature_drift': EffectSpace('temperature_drift', [
-            Param('amplitude', 0.3 * sig_long, 3.0 * sig_sample, sign=warm_sign),
-            Param('tau_s', length / 200, length / 2)]),
+        'temperature_drift': warm_up_space(sig_long, sig_sample, length, warm_sign,
+                                           onset, step_sign),
         # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
         # line between bins spreads its power differently from one on a bin).
         'vibration': EffectSpace('vibration', [
@@ -200,6 +206,28 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             Param('q', 1.0, 300.0)]),
     }
     return [spaces[k] for k in names]
+
+
+def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
+                  onset: float, step_sign: float) -> EffectSpace:
+    """
+    ``temperature_drift``'s search: a warm-up from power-on, or one that started later.
+
+    The power-on form as always (amplitude, lag), then its onset ``t0_s`` from none; and,
+    as an alternative start, the onset at the record's change point with the sign there,
+    amplitude and lag fitted around it, then the onset, then both again (a draught, a
+    heater switching mid-record). The better of the two is kept.
+    """
+    t0 = Param('t0_s', 0.01 * length, 0.9 * length, log=False, off_at='lo')
+    power_on = EffectSpace('temperature_drift', [
+        Param('amplitude', amp_lo, amp_hi, sign=warm_sign),
+        Param('tau_s', length / 200, length / 2), t0])
+    if not t0.lo < onset < t0.hi:
+        return power_on
+    later = EffectSpace('temperature_drift', [
+        Param('amplitude', amp_lo, amp_hi, sign=step_sign),
+        Param('tau_s', length / 200, length / 2), replace(t0, init=onset)], passes=2)
+    return replace(power_on, alternatives=(later,))
 
 
 def checked_records(records: Sequence, dt: float, max_samples: Optional[int] = None):

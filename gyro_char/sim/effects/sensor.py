@@ -10,7 +10,7 @@ from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
-from gyro_char.sim.effects.base import Effect, register
+from gyro_char.sim.effects.base import describe_without, Effect, register
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
@@ -98,7 +98,7 @@ class InternalLowpass(Effect):
 
 @register
 class TemperatureDrift(Effect):
-    """Exponential bias warm-up after power-on."""
+    """Exponential bias transient: a warm-up after power-on, or a thermal step mid-record."""
 
     name = 'temperature_drift'
     summary = 'bias transient settling exponentially while the sensor warms up'
@@ -106,18 +106,25 @@ class TemperatureDrift(Effect):
                'temperature linearly: bias(t) = bias + amplitude exp(-t / tau_s), settling to '
                'the nominal bias. In a static record: a deterministic decay seen as a slope '
                'at tau ~ tau_s in the Allan curve and a trend in the mean; in a swing run: a '
-               'drift the linear-drift state only partly absorbs.')
-    PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0'),
+               'drift the linear-drift state only partly absorbs. t0_s > 0: the transient '
+               'starts mid-record (a draught, a door, a heater or fan switching): the bias '
+               'holds amplitude until t0_s, then settles through the same lag, '
+               'amplitude exp(-(t - t0_s) / tau_s).')
+    PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0 (before t0_s)'),
               'tau_s': (600.0, 's', 'thermal time constant'),
+              't0_s': (0.0, 's', 'when the transient starts (0: at power-on)'),
               'axis': _axis_param()}
 
     def check(self):
         _rows(self)
-        if self.tau_s <= 0:
-            raise InputError('temperature_drift: tau_s must be > 0')
+        if self.tau_s <= 0 or self.t0_s < 0:
+            raise InputError('temperature_drift: tau_s must be > 0 and t0_s >= 0')
+
+    def describe(self):
+        return describe_without(self, 't0_s')
 
     def sensor(self, ctx, gyro, accel):
-        shape = self.amplitude * np.exp(-ctx.t / self.tau_s)
+        shape = self.amplitude * np.exp(-np.maximum(ctx.t - self.t0_s, 0.0) / self.tau_s)
         gyro = gyro.copy()
         for r in _rows(self):
             gyro[r] += shape
