@@ -55,12 +55,13 @@ def test_expected_observables_equal_the_twins_within_their_scatter(name):
         assert 0.55 < ratio < 1.6, (name, block, ratio)
 
 
-def test_a_warm_up_reads_the_same_through_the_segment_form_and_a_direct_welch():
-    # The per-segment exponential decomposition (t0 = 0) against one Welch transform of the
-    # detrended term, which a transient starting mid-record takes instead.
+@pytest.mark.parametrize('name', ['temperature_drift', 'temperature_step'])
+def test_a_warm_up_reads_the_same_through_the_segment_form_and_a_direct_welch(name):
+    # The per-segment decomposition (exponentials; a transient's first segments as terms of
+    # their own) against one Welch transform of the detrended term.
     n = 2 ** 15
     g = expected.grids(n, DT)
-    spec = model_spectrum(BASE.N, LSB, DT, CASES['temperature_drift'])
+    spec = model_spectrum(BASE.N, LSB, DT, CASES[name] + [LOWPASS])
     det = expected.deterministic(spec, g, obs.ACF_LAGS)
     direct = obs.welch_psd(obs.detrend(spec.deterministic(n)), DT)[1]
     assert det.welch == pytest.approx(direct, rel=1e-6, abs=1e-9 * direct.max())

@@ -62,7 +62,7 @@ def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
     if blk > 1 and ref.size:
         small = m < blk
         av[small] = av[ref[0]] * (m[small] / blk) ** 2
-    p = _det_welch(spec, g, slope, d)
+    p = _det_welch(spec, g, slope)
     d1 = float(np.mean(np.diff(d) ** 2))
     r0 = float(np.dot(d, d)) / g.n
     acov = r0 - 0.5 * d1 * np.arange(lags + 1) ** 2
@@ -71,15 +71,14 @@ def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
     return Deterministic(av, p, acov, drift)
 
 
-def _det_welch(spec: ModelSpectrum, g, slope: float, d: np.ndarray) -> np.ndarray:
+def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
     """
-    Welch PSD of the detrended warm-up ``d``: per segment s, sum_i a_is e_i(j) - slope j.
+    Welch PSD of the detrended warm-up: per segment s, sum_i a_is e_i(j) - slope j.
 
-    A transient that starts mid-record is not one exponential in the segment it starts in:
-    its Welch PSD is taken from ``d`` itself (one Welch transform of the record's length).
+    A transient that starts mid-record (t0 > 0) is a constant, which the segment's mean
+    removes, in the segments before t0, the exponential after; the one or two segments it
+    starts in get its own values as a term of their own.
     """
-    if any(t0 > 0.0 for _, _, t0 in spec.warmups):
-        return obs.welch_psd(d, g.dt)[1]
     L = g.nps
     step = L // 2
     nseg = (g.n - L) // step + 1
@@ -87,8 +86,17 @@ def _det_welch(spec: ModelSpectrum, g, slope: float, d: np.ndarray) -> np.ndarra
     j = np.arange(L, dtype=np.float64)
     t0 = np.arange(nseg) * step * g.dt
     coef, shapes = [], []
-    for amp, tau, _ in spec.warmups:
-        coef.append(spec.deterministic_at(t0, amp, tau))
+    for amp, tau, start in spec.warmups:
+        a = spec.deterministic_at(t0, amp, tau)
+        if start > 0.0:
+            first = t0 + spec.time_shift
+            before = first + (L - 1) * g.dt <= start
+            inside = ~before & (first < start)
+            a = np.where(before | inside, 0.0, spec.deterministic_at(t0, amp, tau, start))
+            for s in np.flatnonzero(inside):
+                coef.append(np.where(np.arange(nseg) == s, 1.0, 0.0))
+                shapes.append(spec.deterministic_at(t0[s] + j * g.dt, amp, tau, start))
+        coef.append(a)
         shapes.append(np.exp(-j * g.dt / tau))
     coef.append(np.full(nseg, -slope))
     shapes.append(j)

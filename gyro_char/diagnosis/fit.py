@@ -147,9 +147,12 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
     the number of ``alternatives`` plus one.
     """
     if space.alternatives:
+        options = (replace(space, alternatives=()),) + tuple(space.alternatives)
+        if near:   # a refit keeps to the start whose parameters the earlier fit has
+            options = tuple(sp for sp in options
+                            if {p.name for p in sp.params} | set(sp.fixed) == set(near)) or options
         fits = [fit_effect(objective, selected, sp, grid=grid, refine=refine, passes=passes,
-                           near=near, at=at)
-                for sp in (replace(space, alternatives=()),) + tuple(space.alternatives)]
+                           near=near, at=at) for sp in options]
         return min(fits, key=lambda f: f[1].gap)
     choices = [p for p in space.params if p.choice]
     if choices:

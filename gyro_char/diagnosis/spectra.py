@@ -171,11 +171,15 @@ class ModelSpectrum:
             out += self.deterministic_at(t, amp, tau, t0)
         return out
 
+    @property
+    def time_shift(self) -> float:
+        """Where an output sample's warm-up value is taken: decimation phase less filter delay."""
+        return (self.decimation - 1) * self.dt_i - 0.5 * (self.taps - 1) * self.stages * self.dt_i
+
     def deterministic_at(self, t: np.ndarray, amp: float, tau: float,
                          t0: float = 0.0) -> np.ndarray:
         """One warm-up term at output times ``t`` (decimation phase and filter delay included)."""
-        shift = (self.decimation - 1) * self.dt_i - 0.5 * (self.taps - 1) * self.stages * self.dt_i
-        since = np.asarray(t) + shift
+        since = np.asarray(t) + self.time_shift
         if t0 > 0.0:
             since = np.maximum(since - t0, 0.0)
         return amp * np.exp(-since / tau)

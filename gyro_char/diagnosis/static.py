@@ -213,20 +213,19 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
     """
     ``temperature_drift``'s search: a warm-up from power-on, or one that started later.
 
-    The power-on form as always (amplitude, lag), then its onset ``t0_s`` from none; and,
-    as an alternative start, the onset at the record's change point with the sign there,
-    amplitude and lag fitted around it, then the onset, then both again (a draught, a
-    heater switching mid-record). The better of the two is kept.
+    The power-on form (amplitude, lag); and, as an alternative start, the onset ``t0_s`` at
+    the record's change point with the sign there: amplitude and lag fitted around it, then
+    the onset (a draught, a heater switching mid-record). The better of the two is kept.
     """
-    t0 = Param('t0_s', 0.01 * length, 0.9 * length, log=False, off_at='lo')
     power_on = EffectSpace('temperature_drift', [
         Param('amplitude', amp_lo, amp_hi, sign=warm_sign),
-        Param('tau_s', length / 200, length / 2), t0])
+        Param('tau_s', length / 200, length / 2)])
+    t0 = Param('t0_s', 0.01 * length, 0.9 * length, log=False, off_at='lo', init=onset)
     if not t0.lo < onset < t0.hi:
         return power_on
     later = EffectSpace('temperature_drift', [
         Param('amplitude', amp_lo, amp_hi, sign=step_sign),
-        Param('tau_s', length / 200, length / 2), replace(t0, init=onset)], passes=2)
+        Param('tau_s', length / 200, length / 2), t0])
     return replace(power_on, alternatives=(later,))
 
 
