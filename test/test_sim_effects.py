@@ -98,6 +98,15 @@ def _swing_cfg():
     return noiseless(BenchConfig.from_preset('adis16405'), keep_errors=False)
 
 
+def _swing_lines(effect, seed, harmonics=3):
+    """Fourier coefficients of a noiseless 20 s swing run's gyro_x, peak rate, ω, sample step."""
+    cfg = _swing_cfg()
+    run = simulate_swing(cfg, duration=20.0, seed=seed, channels=['gyro_x'], effects=[effect])
+    w = 2 * np.pi / cfg.stand.period_s
+    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, harmonics)
+    return c, cfg.stand.amplitude * w, w, float(np.median(np.diff(run.imu.t)))
+
+
 def test_time_delay_fractional_gives_quadrature_residual():
     cfg = _swing_cfg()
     delay = 3.7e-4       # 0.37 of a 1 kHz sample
@@ -214,13 +223,8 @@ def test_vibration_line_amplitude_and_frequency():
 
 
 def test_scale_factor_nonlinearity_harmonics():
-    cfg = _swing_cfg()
     k2, k3 = 0.02, 0.05
-    run = simulate_swing(cfg, duration=20.0, seed=11, channels=['gyro_x'],
-                         effects=[f'scale_factor_nonlinearity:k2={k2},k3={k3}'])
-    w = 2 * np.pi / cfg.stand.period_s
-    big_w = cfg.stand.amplitude * w
-    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
+    c, big_w, _, _ = _swing_lines(f'scale_factor_nonlinearity:k2={k2},k3={k3}', 11)
     assert c[0] == pytest.approx(k2 * big_w ** 2 / 2, rel=1e-3)
     assert c[1] == pytest.approx(big_w + 3 * k3 * big_w ** 3 / 4, rel=1e-4)
     assert c[3] == pytest.approx(k2 * big_w ** 2 / 2, rel=1e-3)
@@ -228,13 +232,8 @@ def test_scale_factor_nonlinearity_harmonics():
 
 
 def test_scale_factor_fifth_order_term_harmonics():
-    cfg = _swing_cfg()
     k5 = 0.4
-    run = simulate_swing(cfg, duration=20.0, seed=11, channels=['gyro_x'],
-                         effects=[f'scale_factor_nonlinearity:k2=0,k5={k5}'])
-    w = 2 * np.pi / cfg.stand.period_s
-    big_w = cfg.stand.amplitude * w
-    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 5)
+    c, big_w, _, _ = _swing_lines(f'scale_factor_nonlinearity:k2=0,k5={k5}', 11, 5)
     # cos^5 = (10 cos + 5 cos 3x + cos 5x) / 16
     assert c[1] == pytest.approx(big_w + 10 * k5 * big_w ** 5 / 16, rel=1e-5)
     assert c[5] == pytest.approx(5 * k5 * big_w ** 5 / 16, rel=1e-3)
@@ -250,15 +249,10 @@ def _one_pole_gain(tau, dt, w):
 
 def test_self_heating_cubic_puts_its_lines_through_the_thermal_lag():
     # w = W cos: k3 w LP(w^2) = k3 W^3 / 2 cos + k3 W^3 / 4 Re[H(2w) (e^{i w t} + e^{3 i w t})]
-    cfg = _swing_cfg()
     k3, tau = 0.2, 0.4
-    run = simulate_swing(cfg, duration=20.0, seed=11, channels=['gyro_x'],
-                         effects=[f'scale_factor_nonlinearity:k2=0,k3={k3},tau_s={tau}'])
-    w = 2 * np.pi / cfg.stand.period_s
-    big_w = cfg.stand.amplitude * w
-    h = _one_pole_gain(tau, float(np.median(np.diff(run.imu.t))), 2 * w)
+    c, big_w, w, dt = _swing_lines(f'scale_factor_nonlinearity:k2=0,k3={k3},tau_s={tau}', 11)
+    h = _one_pole_gain(tau, dt, 2 * w)
     assert abs(h) < 0.75         # the lag matters at 2f
-    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
     line = k3 * big_w ** 3 / 4
     assert c[1] == pytest.approx(big_w + 2 * line + line * h.real, rel=1e-4)
     assert c[2] == pytest.approx(-line * h.imag, rel=1e-2)
@@ -271,12 +265,8 @@ def test_self_heating_cubic_puts_its_lines_through_the_thermal_lag():
 def test_lock_in_rate_follows_the_adler_law_in_every_odd_line():
     # omega_out = sign(w) sqrt(w^2 - L^2) outside |w| < L, 0 inside: Fourier lines by quadrature
     from scipy import integrate
-    cfg = _swing_cfg()
     lock = 0.08
-    run = simulate_swing(cfg, duration=20.0, seed=13, channels=['gyro_x'],
-                         effects=[f'scale_factor_nonlinearity:k2=0,lock_in={lock}'])
-    w = 2 * np.pi / cfg.stand.period_s
-    big_w = cfg.stand.amplitude * w
+    c, big_w, _, _ = _swing_lines(f'scale_factor_nonlinearity:k2=0,lock_in={lock}', 13, 5)
 
     def law(th):
         x = big_w * np.cos(th)
@@ -284,7 +274,6 @@ def test_lock_in_rate_follows_the_adler_law_in_every_odd_line():
 
     edge = np.arccos(lock / big_w)
     cuts = [edge, np.pi - edge, np.pi + edge, 2 * np.pi - edge]
-    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 5)
     for h, k in ((1, 1), (3, 5), (5, 9)):
         want = integrate.quad(lambda th: law(th) * np.cos(h * th), 0, 2 * np.pi, points=cuts,
                               limit=200)[0] / np.pi
@@ -295,17 +284,11 @@ def test_lock_in_rate_follows_the_adler_law_in_every_odd_line():
 def test_relaxing_asymmetry_shifts_the_second_harmonic_and_keeps_f_clean():
     # a w LP(sign w), sign(cos) = sum over odd m of b_m cos(m w t): only even lines;
     # 2f from m = 1 and 3: (a W / 2) (b_1 H(w) + b_3 H(3 w)), DC (a W / 2) Re b_1 H(w).
-    cfg = _swing_cfg()
     a, tau = 0.01, 0.3
-    run = simulate_swing(cfg, duration=20.0, seed=12, channels=['gyro_x'],
-                         effects=[f'scale_factor_asymmetry:a={a},tau_s={tau}'])
-    w = 2 * np.pi / cfg.stand.period_s
-    big_w = cfg.stand.amplitude * w
-    dt = float(np.median(np.diff(run.imu.t)))
+    c, big_w, w, dt = _swing_lines(f'scale_factor_asymmetry:a={a},tau_s={tau}', 12)
     b1, b3 = 4 / np.pi, -4 / (3 * np.pi)
     h1, h3 = _one_pole_gain(tau, dt, w), _one_pole_gain(tau, dt, 3 * w)
     two_f = 0.5 * a * big_w * (b1 * h1 + b3 * h3)
-    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
     assert c[0] == pytest.approx(0.5 * a * big_w * (b1 * h1).real, rel=1e-2)
     assert c[3] == pytest.approx(two_f.real, rel=2e-2)
     assert c[4] == pytest.approx(-two_f.imag, rel=2e-2)
@@ -313,13 +296,8 @@ def test_relaxing_asymmetry_shifts_the_second_harmonic_and_keeps_f_clean():
 
 
 def test_scale_factor_asymmetry_dc_and_second_harmonic():
-    cfg = _swing_cfg()
     a = 0.01
-    run = simulate_swing(cfg, duration=20.0, seed=12, channels=['gyro_x'],
-                         effects=[f'scale_factor_asymmetry:a={a}'])
-    w = 2 * np.pi / cfg.stand.period_s
-    big_w = cfg.stand.amplitude * w
-    c = _fourier(run.imu.t, run.imu.channels['gyro_x'], w, 3)
+    c, big_w, _, _ = _swing_lines(f'scale_factor_asymmetry:a={a}', 12)
     assert c[0] == pytest.approx(2 * a * big_w / np.pi, rel=1e-3)
     assert c[1] == pytest.approx(big_w, rel=1e-5)
     assert c[3] == pytest.approx(4 * a * big_w / (3 * np.pi), rel=1e-2)
