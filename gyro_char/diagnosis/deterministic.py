@@ -75,9 +75,9 @@ def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
     """
     Welch PSD of the detrended warm-up: per segment s, sum_i a_is e_i(j) - slope j.
 
-    A transient that starts mid-record (t0 > 0) is a constant, which the segment's mean
-    removes, in the segments before t0, the exponential after; the one or two segments it
-    starts in get its own values as a term of their own.
+    A transient that starts mid-record (t0 > 0) is constant before t0, which each segment's
+    mean removes, and exponential after it; the one or two segments it starts in are terms
+    of their own, with the transient's own values.
     """
     L = g.nps
     step = L // 2
