@@ -87,12 +87,12 @@ def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
     t0 = np.arange(nseg) * step * g.dt
     coef, shapes = [], []
     for amp, tau, start in spec.warmups:
-        a = spec.deterministic_at(t0, amp, tau)
+        a = spec.deterministic_at(t0, amp, tau, start)
         if start > 0.0:
             first = t0 + spec.time_shift
             before = first + (L - 1) * g.dt <= start
             inside = ~before & (first < start)
-            a = np.where(before | inside, 0.0, spec.deterministic_at(t0, amp, tau, start))
+            a = np.where(before | inside, 0.0, a)
             for s in np.flatnonzero(inside):
                 coef.append(np.where(np.arange(nseg) == s, 1.0, 0.0))
                 shapes.append(spec.deterministic_at(t0[s] + j * g.dt, amp, tau, start))

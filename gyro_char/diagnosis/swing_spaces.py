@@ -27,6 +27,7 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
     # N^2 / w^2 projected over the record): a delay and a g-sensitivity are searched over
     # the same span of quadrature amplitudes, so neither is favoured by its grid.
     q = base.N / w * np.sqrt(2.0 / base.duration)
+    memory = Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s, off_at='lo')
     return [
         # The gyro lag part of the delay (a one-pole filter inside the gyro): the motion
         # sees delay_s whatever the split, the lag alone colours the noise; searched over the
@@ -46,14 +47,10 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         # lock-in rate last, from none up to a third of the peak rate.
         EffectSpace('scale_factor_nonlinearity', [
             Param('k2', 0.03 * sig / rate ** 2, 3000.0 * sig / rate ** 2),
-            Param('k3', 0.03 * sig / rate ** 3, 3000.0 * sig / rate ** 3),
-            Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s,
-                  off_at='lo'),
+            Param('k3', 0.03 * sig / rate ** 3, 3000.0 * sig / rate ** 3), memory,
             Param('lock_in', LOCK_IN[0] * rate, LOCK_IN[1] * rate, off_at='lo')]),
         EffectSpace('scale_factor_asymmetry', [
-            Param('a', 0.03 * sig / rate, 300.0 * sig / rate),
-            Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s,
-                  off_at='lo')]),
+            Param('a', 0.03 * sig / rate, 300.0 * sig / rate), memory]),
         # Line count: started by ``signs`` at the record's line-spectrum peak (exact to a
         # fraction of a line); its range is +-1 % around that start (a whole number).
         EffectSpace('encoder_cyclic_error', [Param('a1', 0.1 * base.encoder_sigma + 1e-9,

@@ -76,9 +76,7 @@ class ScaleFactorAsymmetry(Effect):
         return describe_without(self, 'tau_s')
 
     def sensor(self, ctx, gyro, accel):
-        w = ctx.true_rate
-        if self.tau_s <= 0.0:
-            return gyro + self.a * np.abs(w), accel
+        w = ctx.true_rate   # w sign(w) is |w| exactly: tau_s 0 is the switch at once
         side = one_pole(np.sign(w), self.tau_s, ctx.dt_internal, start='periodic')
         return gyro + self.a * w * side, accel
 

@@ -40,8 +40,6 @@ class TimeDelay(Effect):
         return describe_without(self, 'lag_s')
 
     def output(self, ctx, gyro, accel):
-        if not self.lag_s:
-            return gyro, accel
         return one_pole(gyro, self.lag_s, ctx.dt), accel
 
     def stamps(self, ctx, t):
