@@ -1,5 +1,5 @@
 """
-What the held-out shape tests (sets C and D) share: the bench numbers and the set checks.
+What the held-out shape tests (sets C to F) share: the bench numbers and the set checks.
 
 Generators only, never the diagnosis: each set's own file checks its shapes' physics; here
 are the checks every set passes (names, edge levels at z ~ 4, finite output, both harnesses
@@ -7,6 +7,7 @@ reach the set by ``--held-out LETTER``).
 """
 import bench_script
 from gyro_char.allan.kernel import overlapping_avar
+from gyro_char.sim.config import BenchConfig
 import numpy as np
 from scipy import signal
 
@@ -15,6 +16,9 @@ N_ARW = 2.4 * np.pi / 180.0 / 60.0
 SIG = N_ARW / np.sqrt(DT)
 AMP, PERIOD = np.deg2rad(20.0), 5.0
 W = 2 * np.pi / PERIOD
+INC = N_ARW * np.sqrt(DT)       # the static records' white-noise angle step per sample
+# sd of a fitted rate-residual sine on a 900 s swing run of the preset's gyro
+S_LINE = BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
 STATIC_NAMES = ['internal_lowpass', 'vibration', 'temperature_drift', 'bias_instability',
                 'rate_random_walk', 'gauss_markov', 'quantization', 'resonance']
 SWING_NAMES = ['time_delay', 'g_sensitivity', 'scale_factor_nonlinearity',

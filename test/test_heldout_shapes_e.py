@@ -3,7 +3,8 @@
 # claim, and both harnesses reach them by --held-out e. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, flicker_band_psd, N_ARW, SIG, stand, swing, W)
+                            fit, flicker_band_psd, INC, N_ARW, S_LINE, SIG, stand, swing,
+                            W)
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -12,8 +13,6 @@ STATIC = bench_script.load('validate_diagnosis_heldout_e')
 SWING = bench_script.load('validate_diagnosis_swing_heldout_e')
 SHAPES = STATIC.shapes(DT, SIG, N_ARW)
 SWING_SHAPES = SWING.shapes(1000.0)
-INC = N_ARW * np.sqrt(DT)
-S_LINE = SWING.BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
