@@ -171,3 +171,24 @@ def test_a_thermal_step_mid_record_is_named_with_its_onset():
     assert fitted['amplitude'] == pytest.approx(-6e-3, rel=0.2)
     assert fitted['t0_s'] == pytest.approx(t0, abs=3 * 20.0)
     assert d.final_gap < min(0.3 * d.baseline_gap, d.null_gap['q95'])
+
+
+def test_a_refined_grid_is_not_served_the_filter_response_of_another_peaks_grid():
+    # Two resonances refine the log grid to the same size and ends; each PSD must be that of
+    # its own grid (a cache keyed on size and ends once served the first grid's |H|^2).
+    nu = expected.grids(2 ** 17, DT).nu_log
+    specs = [model_spectrum(7e-4, LSB, DT, [LOWPASS, ('resonance', {'sigma': 5e-3,
+                                                                    'freq_hz': f0, 'q': 25.0})])
+             for f0 in (12.0, 31.0)]
+    grids = [s.refine(nu) for s in specs]
+    assert grids[0].size == grids[1].size and grids[0][-1] == grids[1][-1]
+    for spec, g in zip(specs, grids):
+        f = g / DT
+        fs_i = 1.0 / spec.dt_i
+        direct = np.zeros_like(f)
+        for r in range(spec.decimation):
+            fr = f + r / DT
+            s2 = np.maximum(np.sin(np.pi * fr / fs_i) ** 2, 1e-300)
+            direct += spec.h2(fr) * (spec.white_int + sum(p(s2) for p in spec.internal))
+        direct = 2.0 * direct + 2.0 * spec.output_white
+        assert np.allclose(spec.one_sided(f), direct, rtol=1e-9, atol=0)

@@ -48,9 +48,11 @@ class Grids:
     dt: float
     m: np.ndarray
     nu_log: np.ndarray            # global log grid in cycles/sample, (0, 1/2]
-    exact: list                   # per m: (nu grid, kernel) of the exact region
+    exact_nu: np.ndarray          # the exact regions' grids, one per m, end to end
+    exact_wk: np.ndarray          # their Allan kernels times trapezoid weights
+    exact_starts: np.ndarray      # where each m's region starts in those
     welch_nu: np.ndarray          # fine Welch grid, cycles/sample, [0, 1)
-    welch_w2: np.ndarray          # |W|^2 on that grid (periodic)
+    welch_w2_hat: np.ndarray      # rfft of |W|^2 on that grid (periodic)
     nps: int
     k_eff: float                  # equivalent number of independent Welch segments
     g_detrend: np.ndarray         # 1 - G(f T) on nu_log
@@ -83,10 +85,7 @@ def grids(n: int, dt: float) -> Grids:
         top = min(0.5, PERIODS / mm)
         step = 1.0 / 128
         u = np.r_[np.geomspace(1e-4, step, 60)[:-1], np.arange(step, top * mm, step), top * mm]
-        nu = u / mm
-        s = np.sin(np.pi * nu)
-        ker = 2.0 * np.sin(np.pi * nu * mm) ** 4 / (mm * mm * s * s)
-        exact.append((nu, ker))
+        exact.append(u / mm)
     nps = obs.welch_segment(n)
     size = FINE * nps
     w = signal.get_window('hann', nps)
@@ -101,8 +100,12 @@ def grids(n: int, dt: float) -> Grids:
         d = _dirichlet(nu_w, nps)
         c = _hann_w(nu_w - k / nps, nps) - _hann_w(np.array([-k / nps]), nps)[0] * d / nps
         low.append(np.abs(c) ** 2)
-    return Grids(low_bins=np.array(low), n=n, dt=dt, m=m, nu_log=nu_log, exact=exact,
-                 welch_nu=np.arange(size) / size, welch_w2=w2, nps=nps, k_eff=k_eff,
+    return Grids(low_bins=np.array(low), n=n, dt=dt, m=m, nu_log=nu_log,
+                 exact_nu=np.concatenate(exact),
+                 exact_wk=np.concatenate([_kernel_weights(x, k) for x, k in zip(exact, m)]),
+                 exact_starts=np.cumsum([0] + [x.size for x in exact[:-1]]),
+                 welch_nu=np.arange(size) / size, welch_w2_hat=np.fft.rfft(w2), nps=nps,
+                 k_eff=k_eff,
                  g_detrend=keep)
 
 
@@ -110,27 +113,50 @@ def _trapz(y, x):
     return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)))
 
 
+def _kernel_weights(nu: np.ndarray, mm, starts=(0,)) -> np.ndarray:
+    """
+    Return the Allan kernel 2 sin^4(pi nu m) / (m^2 sin^2(pi nu)) times trapezoid weights.
+
+    ``nu`` may hold several grids end to end (beginning at ``starts``), ``mm`` then one
+    cluster size per point; each grid's weights are its own.
+    """
+    s = np.sin(np.pi * nu)
+    d = 0.5 * np.diff(nu)
+    d[np.asarray(starts[1:], dtype=int) - 1] = 0.0       # no interval across two grids
+    w = np.r_[d, 0.0] + np.r_[0.0, d]
+    q = np.sin(np.pi * nu * mm)
+    q *= q
+    return 2.0 * q * q / (mm * mm * s * s) * w
+
+
+def _exact_region(spec: ModelSpectrum, g: Grids):
+    """(grid, kernel weights, starts) of every m's exact region, refined across the peaks."""
+    if not spec.peaks:
+        return g.exact_nu, g.exact_wk, g.exact_starts
+    nus = []
+    for x in np.split(g.exact_nu, g.exact_starts[1:]):
+        r = spec.refine(x)
+        nus.append(r[(r >= x[0]) & (r <= x[-1])])     # a peak outside adds nothing here
+    sizes = [x.size for x in nus]
+    starts = np.cumsum([0] + sizes[:-1])
+    nu = np.concatenate(nus)
+    return nu, _kernel_weights(nu, np.repeat(g.m.astype(float), sizes), starts), starts
+
+
 def avar(spec: ModelSpectrum, g: Grids, parts=None) -> np.ndarray:
     """Return the expected Allan variance of the stochastic part at the grid's cluster sizes."""
     dt = g.dt
-    out = np.empty(g.m.size)
     nu = spec.refine(g.nu_log)
-    s_log = spec.one_sided(nu / dt, parts) / dt
+    e_nu, e_wk, starts = _exact_region(spec, g)
+    s_all = spec.one_sided(np.concatenate([nu, e_nu]) / dt, parts) / dt
+    s_log = s_all[:nu.size]
     sn = np.sin(np.pi * nu)
     avg = s_log * 0.75 / (sn * sn)
     cum = np.r_[0.0, np.cumsum(0.5 * (avg[1:] + avg[:-1]) * np.diff(nu))]
-    for i, mm in enumerate(g.m):
-        nu_e, ker = g.exact[i]
-        if spec.peaks:
-            nu_e = spec.refine(nu_e)
-            nu_e = nu_e[nu_e <= g.exact[i][0][-1]]
-            s = np.sin(np.pi * nu_e)
-            ker = 2.0 * np.sin(np.pi * nu_e * mm) ** 4 / (mm * mm * s * s)
-        val = _trapz(spec.one_sided(nu_e / dt, parts) / dt * ker, nu_e)
-        top = PERIODS / mm
-        if top < 0.5:
-            val += (cum[-1] - np.interp(top, nu, cum)) / (mm * mm)
-        out[i] = val
+    out = np.add.reduceat(s_all[nu.size:] * e_wk, starts)
+    top = PERIODS / g.m
+    tail = top < 0.5
+    out[tail] += (cum[-1] - np.interp(top[tail], nu, cum)) / (g.m[tail] * g.m[tail])
     if parts is None:
         for f0, power in spec.lines:
             x = f0 * dt
@@ -149,7 +175,7 @@ def welch_expected(spec: ModelSpectrum, g: Grids):
     s_two = np.zeros(size)
     pos = f > 0
     s_two[pos] = 0.5 * spec.one_sided(f[pos]) / dt     # two-sided per cycle/sample
-    conv = np.real(np.fft.ifft(np.fft.fft(s_two) * np.fft.fft(g.welch_w2))) / size
+    conv = np.fft.irfft(np.fft.rfft(s_two) * g.welch_w2_hat, size) / size
     w = signal.get_window('hann', g.nps)
     norm = dt / np.dot(w, w)
     bins = np.arange(g.nps // 2 + 1)
@@ -195,7 +221,9 @@ def acf_integrals(spec: ModelSpectrum, g: Grids, lags: int):
     keep = g.g_detrend if nu.size == g.nu_log.size else _detrend_keep(nu * g.n)
     r0 = _trapz(s * keep, nu)
     k = np.arange(1, lags + 1)
-    dk = np.array([2.0 * _trapz(s * (1.0 - np.cos(2.0 * np.pi * nu * kk)), nu) for kk in k])
+    d = 0.5 * np.diff(nu)
+    w = s * (np.r_[d, 0.0] + np.r_[0.0, d])                  # trapezoid weights
+    dk = 4.0 * (np.sin(np.pi * np.outer(k, nu)) ** 2 @ w)   # 2 (1 - cos 2 pi nu k)
     for f0, power in spec.lines:
         x = f0 * g.dt
         r0 += power * float(_detrend_keep(np.array([x * g.n]))[0])
@@ -223,8 +251,10 @@ def tone_block(noise: np.ndarray, lines: np.ndarray, g: Grids, layout) -> np.nda
     # the draws' own running median is taken.
     half = size // 2
     if p.shape[1] > 4 * size:
-        base[:, :half] = _edge_median(p[:, :size], half)
-        base[:, -half:] = _edge_median(p[:, ::-1][:, :size], half)[:, ::-1]
+        rows = p.shape[0]
+        both = _edge_median(np.concatenate([p[:, :size], p[:, ::-1][:, :size]]), half)
+        base[:, :half] = both[:rows]
+        base[:, -half:] = both[rows:, ::-1]
     prom = np.log10(p / np.maximum(base, 1e-300))
     f = np.arange(p.shape[1]) / (g.nps * g.dt)
     out = np.empty((p.shape[0], len(layout.ranges['tone'])))
@@ -236,10 +266,12 @@ def tone_block(noise: np.ndarray, lines: np.ndarray, g: Grids, layout) -> np.nda
 
 def _edge_median(p: np.ndarray, half: int) -> np.ndarray:
     """Return the running median of the first ``half`` columns, the first one padded."""
+    # Every row padded, end to end through one 1-D running median (scipy's is a running one,
+    # ~50x a 2-D window's sort); each kept window lies within its own row.
     size = 2 * half + 1
-    padded = np.concatenate([np.repeat(p[:, :1], half, axis=1), p], axis=1)
-    win = np.lib.stride_tricks.sliding_window_view(padded, size, axis=1)[:, :half]
-    return np.median(win, axis=2)
+    padded = np.concatenate([np.repeat(p[:, :1], half, axis=1), p[:, :size]], axis=1)
+    run = ndimage.median_filter(padded.ravel(), size=size, mode='nearest')
+    return run.reshape(padded.shape)[:, half:2 * half]
 
 
 @lru_cache(maxsize=4)

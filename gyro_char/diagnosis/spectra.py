@@ -15,6 +15,7 @@ for one model; every observable's expectation is a linear functional of it
 (``gyro_char.diagnosis.expected``). The output step is taken as white rounding noise
 (lsb^2 / 12 per sample), exact enough when the per-sample noise exceeds half a step.
 """
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence, Tuple
 
@@ -27,11 +28,14 @@ CLOSED_FORM = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gaus
                'quantization', 'temperature_drift', 'vibration', 'resonance')
 
 
+# Every internal PSD is a function of s2 = sin^2(pi f dt_i) (cos 2 pi f dt_i = 1 - 2 s2), so
+# ``ModelSpectrum.one_sided`` takes one sine per frequency image for all of them; the forms
+# below keep the small-f factors in s2 (no 1 - cos cancellation).
 def _ar1(sigma: float, tau_s: float, dt: float, order: int) -> Callable:
     a = np.exp(-dt / tau_s)
 
-    def psd(f):
-        den = 1.0 - 2.0 * a * np.cos(2.0 * np.pi * f * dt) + a * a
+    def psd(s2):
+        den = (1.0 - a) ** 2 + 4.0 * a * s2
         if order == 2:
             return sigma ** 2 * (1.0 - a * a) ** 3 / (1.0 + a * a) * dt / den ** 2
         return sigma ** 2 * (1.0 - a * a) * dt / den
@@ -41,39 +45,40 @@ def _ar1(sigma: float, tau_s: float, dt: float, order: int) -> Callable:
 def _resonance(sigma: float, freq_hz: float, q: float, dt: float) -> Callable:
     a1, a2, var_e = resonance_coefficients(freq_hz, q, dt)
 
-    def psd(f):
-        z = np.exp(-2j * np.pi * f * dt)
-        return sigma ** 2 * var_e * dt / np.abs(1.0 - a1 * z - a2 * z * z) ** 2
+    def psd(s2):
+        # |1 - a1 z - a2 z^2|^2, z = exp(-i w), in c = cos w.
+        c = 1.0 - 2.0 * s2
+        den = 1.0 + a1 * a1 + a2 * a2 - 2.0 * a1 * (1.0 - a2) * c - 2.0 * a2 * (2.0 * c * c - 1.0)
+        return sigma ** 2 * var_e * dt / den
     return psd
 
 
 def _flicker(b: float, corner_hz: float, dt: float) -> Callable:
     # Kasdin-Walter 1/f; with an upper corner times the half-order lowpass of noise_gen.flicker,
     # (1 - c) / |1 - c e^(-i w)|, c = exp(-2 pi corner dt): 1/f^2 above the corner.
-    def one_over_f(f):
-        return b * b * dt / (2.0 * np.sqrt(_sin2(f, dt)))
+    def one_over_f(s2):
+        return b * b * dt / (2.0 * np.sqrt(s2))
     if not corner_hz:
         return one_over_f
     c = float(np.exp(-2.0 * np.pi * corner_hz * dt))
 
-    def psd(f):
-        den = np.sqrt(1.0 - 2.0 * c * np.cos(2.0 * np.pi * f * dt) + c * c)
-        return one_over_f(f) * (1.0 - c) / den
+    def psd(s2):
+        den = np.sqrt((1.0 - c) ** 2 + 4.0 * c * s2)
+        return one_over_f(s2) * (1.0 - c) / den
     return psd
 
 
-def _sin2(f, dt):
-    s = np.sin(np.pi * f * dt)
-    return np.maximum(s * s, 1e-300)
-
-
 def internal_psd(name: str, p: dict, dt_i: float) -> Optional[Callable]:
-    """Two-sided PSD per Hz at the internal rate of one noise effect (None: not a noise)."""
+    """
+    Two-sided PSD per Hz at the internal rate of one noise effect (None: not a noise).
+
+    The callable takes s2 = sin^2(pi f dt_i) (floored at 1e-300), not f.
+    """
     if name == 'bias_instability':
         return _flicker(p['B'], p.get('corner_hz', 0.0), dt_i)
     if name == 'rate_random_walk':
         k = p['K']
-        return lambda f: k * k * dt_i * dt_i / (4.0 * _sin2(f, dt_i))
+        return lambda s2: k * k * dt_i * dt_i / (4.0 * s2)
     if name == 'gauss_markov':
         return _ar1(p['sigma'], p['tau_s'], dt_i, int(p.get('order', 1.0)))
     if name == 'resonance':
@@ -87,7 +92,8 @@ def fold(f, rate: float):
     return np.minimum(g, rate - g)
 
 
-_H2_CACHE: dict = {}
+_IMAGES: 'OrderedDict[tuple, list]' = OrderedDict()
+IMAGE_CACHE = 8         # grids whose images are kept (~10 MB each for the Allan grids)
 
 
 @dataclass
@@ -124,23 +130,51 @@ class ModelSpectrum:
 
     def h2(self, f: np.ndarray) -> np.ndarray:
         """|H(f)|^2 of the internal filter at internal-rate frequencies ``f``."""
-        key = (self.taps, self.stages, self.dt_i, f.size, float(f[0]), float(f[-1]))
-        hit = _H2_CACHE.get(key)
-        if hit is not None:
-            return hit
-        if len(_H2_CACHE) > 512:
-            _H2_CACHE.clear()
-        _H2_CACHE[key] = out = self._h2(f)
-        return out
-
-    def _h2(self, f: np.ndarray) -> np.ndarray:
         if self.taps <= 1:
             return np.ones(np.shape(f))
-        x = np.pi * np.asarray(f) * self.dt_i
-        s = np.sin(x)
-        small = np.abs(s) < 1e-12
-        ratio = np.where(small, 1.0, np.sin(self.taps * x) / (self.taps * np.where(small, 1.0, s)))
-        return ratio ** (2 * self.stages)
+        x = np.pi * np.asarray(f, dtype=np.float64) * self.dt_i
+        return self._h2(np.sin(x), np.sin(self.taps * x))
+
+    def _h2(self, sin_x: np.ndarray, sin_tx: np.ndarray) -> np.ndarray:
+        small = np.abs(sin_x) < 1e-12
+        ratio = np.where(small, 1.0, sin_tx / (self.taps * np.where(small, 1.0, sin_x)))
+        ratio = ratio * ratio
+        out = ratio
+        for _ in range(self.stages - 1):
+            out = out * ratio
+        return out
+
+    def images(self, f: np.ndarray) -> list:
+        """
+        Per image r of the decimation: (sin^2(pi dt_i (f + r fs)), floored; |H|^2 there).
+
+        They depend on the grid and the filter only, not on the effects, so the last few
+        grids' are kept (keyed by the grid's bytes); the sines of all the images come from
+        one sine and cosine of the grid (x + pi r / D, by angle addition).
+        """
+        key = (self.taps, self.stages, self.decimation, self.dt, f.tobytes())
+        hit = _IMAGES.get(key)
+        if hit is not None:
+            _IMAGES.move_to_end(key)
+            return hit
+        x = np.pi * self.dt_i * f
+        sx, cx = np.sin(x), np.cos(x)
+        if self.taps > 1:
+            stx, ctx = np.sin(self.taps * x), np.cos(self.taps * x)
+        out = []
+        for r in range(self.decimation):
+            b = np.pi * r / self.decimation
+            s = sx * np.cos(b) + cx * np.sin(b) if r else sx
+            if self.taps > 1:
+                bt = self.taps * b
+                h2 = self._h2(s, stx * np.cos(bt) + ctx * np.sin(bt) if r else stx)
+            else:
+                h2 = np.ones_like(f)
+            out.append((np.maximum(s * s, 1e-300), h2))
+        _IMAGES[key] = out
+        if len(_IMAGES) > IMAGE_CACHE:
+            _IMAGES.popitem(last=False)
+        return out
 
     def one_sided(self, f, parts: Optional[Sequence[int]] = None) -> np.ndarray:
         """
@@ -149,16 +183,14 @@ class ModelSpectrum:
         ``parts``: indices of ``internal`` to include (default all), plus the white parts;
         ``parts=()`` gives the white parts only.
         """
-        f = np.asarray(f, dtype=np.float64)
-        fs = 1.0 / self.dt
+        f = np.ascontiguousarray(f, dtype=np.float64)
         total = np.zeros_like(f)
         sel = range(len(self.internal)) if parts is None else parts
-        for r in range(self.decimation):
-            fr = f + r * fs
+        for s2, h2 in self.images(f):
             s = np.full_like(f, self.white_int)
             for i in sel:
-                s = s + self.internal[i](fr)
-            total += self.h2(fr) * s
+                s += self.internal[i](s2)
+            total += h2 * s
         s_sin = np.sin(np.pi * f * self.dt)
         total += self.output_white + self.angle_var * 4.0 * s_sin * s_sin / self.dt
         return 2.0 * total

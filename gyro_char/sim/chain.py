@@ -103,7 +103,7 @@ def specific_force(axis: int, angle: np.ndarray) -> np.ndarray:
     The sensor is assumed on the swing axis (no centripetal or tangential term).
     """
     f = np.zeros((3, angle.size))
-    if axis == 2:
+    if axis == 2 or not angle.any():        # about the vertical, or a static record
         f[2] = G0
         return f
     s, c = G0 * np.sin(angle), G0 * np.cos(angle)

@@ -21,6 +21,8 @@ Everything is vectorised; 3.6 M samples take about a second. ``expected_avar`` g
 discrete-time expectation of the generator's Allan variance (tests compare both with
 ``gyro_char.allan.model``).
 """
+from functools import lru_cache
+
 import numpy as np
 from scipy import fft as sfft
 
@@ -40,20 +42,27 @@ def flicker(n: int, rng: np.random.Generator, alpha: float = 1.0,
     """
     if n <= 0:
         return np.zeros(0)
+    w = rng.standard_normal(n)
+    nfft = sfft.next_fast_len(2 * n, real=True)
+    return sfft.irfft(_kernel_spectrum(n, float(alpha), float(corner), nfft)
+                      * sfft.rfft(w, nfft), nfft)[:n]
+
+
+@lru_cache(maxsize=1)
+def _kernel_spectrum(n: int, alpha: float, corner: float, nfft: int) -> np.ndarray:
+    """Return the rfft of ``flicker``'s filter (kept: a record's twins draw many of one length)."""
     k = np.arange(1, n, dtype=np.float64)
     h = np.empty(n)
     h[0] = 1.0
     h[1:] = np.cumprod((k - 1.0 + alpha / 2.0) / k)
-    w = rng.standard_normal(n)
-    nfft = sfft.next_fast_len(2 * n, real=True)
     spec = sfft.rfft(h, nfft)
     if corner > 0:
         b = float(np.exp(-2.0 * np.pi * corner))
         # b^k underflows to 0 beyond ~700 / (2 pi corner) samples: the tail is exactly 0 there.
         g = (1.0 - b) ** (alpha / 2.0) * np.exp(np.arange(n) * np.log(b)) * h
         spec = spec * sfft.rfft(g, nfft)
-    y = sfft.irfft(spec * sfft.rfft(w, nfft), nfft)[:n]
-    return y
+    spec.flags.writeable = False
+    return spec
 
 
 def generate(n: int, dt: float, *, N: float = 0.0, B: float = 0.0, K: float = 0.0,
