@@ -31,7 +31,7 @@ def _segments(lo, hi, c, t):
 
 
 def spike_moments(c: np.ndarray, k: np.ndarray, t: float):
-    """E[y] and E[y^2] of the filtered sample with centre ``c``, one neighbour ``k``, other N(0,1)."""
+    """E[y], E[y^2] of the filtered sample: centre ``c``, one neighbour ``k``, the other N(0, 1)."""
     lo, hi = np.minimum(c, k), np.maximum(c, k)
     pdf, cdf = stats.norm.pdf, stats.norm.cdf
     m1, m2 = c.copy(), c * c
@@ -250,10 +250,12 @@ def scalloping(bins: float) -> float:
                  / w.sum())
 
 
-def knock_lines(f0: float, dt: float):
-    """Frequencies k / P below Nyquist and amplitudes (unit ring) of the knock train's lines."""
+def knock_lines(f0: float, dt: float, fold: int = 3000):
+    """Frequencies k / P below Nyquist and rms amplitudes (unit ring) of the sampled train's
+    lines: each the lines sampling folds onto it (f + j / dt), power-averaged over the phase."""
     f = np.arange(1, int(0.5 / dt * KNOCK_PERIOD)) / KNOCK_PERIOD
-    return f, 2 * np.abs(knock_spectrum(f, f0)) / KNOCK_PERIOD
+    fa = f[:, None] + np.arange(-fold, fold + 1)[None, :] / dt
+    return f, 2 * np.sqrt(np.sum(np.abs(knock_spectrum(fa, f0)) ** 2, axis=1)) / KNOCK_PERIOD
 
 
 @lru_cache(maxsize=8)
