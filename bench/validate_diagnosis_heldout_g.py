@@ -1,4 +1,86 @@
-"""DOCSTRING"""
+"""
+Held-out set G of static effect shapes: written blind, without running the diagnosis.
+
+Same interface as ``validate_diagnosis_heldout_f.py`` (``shapes(dt, sig, n_arw)``, levels
+[weak, strong, edge of detectability on a 2 h record]); every shape is a physical form unlike
+the catalogue's, the development shapes (``validate_diagnosis.py``) and held-out sets A-F, and
+the kinds of departure differ from shape to shape:
+
+- internal_lowpass: a spike filter: the firmware replaces a sample by the median of it and its
+  two neighbours when it differs from that median by more than a threshold (a Hampel
+  identifier, one sample of latency); with threshold 0 a plain running median of three: an
+  order-statistic smoother, data-selective (catalogue moving averages; dev Hann; A binomial;
+  B one-pole; C Butterworth; D windowed sinc: linear; E stale reads: a time-varying hold; F
+  slew limiting: a rate-limited follower);
+- vibration: a knocking mechanism: a relay, valve or piston strikes the mount every 0.8 s and
+  each knock rings a mount mode (31.2 Hz, 18.7 Hz) that decays with 0.12 s: a periodic train
+  of ring-downs, lines at k / 0.8 s under the ring's Lorentzian-like envelope (the sampled
+  lines include what sampling folds onto them) (dev 20 % AM; A chirp; B harmonics; C wander;
+  D AM sidebands; E gated; F FM: all continuous tones);
+- temperature_drift: a thermal-gradient response: the bias senses dT/dt (a gradient across
+  the die), and the lab's HVAC moves the ambient along a logistic step of width w = 150 s
+  centred at 2700 s, so the bias is a transient bump A sech^2((t - 2700 s) / 2w) that returns
+  to where it started, area 4 w A (catalogue, dev, A, B, F: warm-ups from power-on; C
+  cycles; D a step; E parabola);
+- bias_instability: held flicker: the on-chip bias compensation writes a correction
+  computed from a slow sensor (its 1/f noise) into a register every 10 s, so the bias is a 1/f
+  sequence held constant between updates at a fixed cadence: PSD b^2 |sin(pi f H)| / (pi^2
+  f^2 H), b^2 / (pi f) below 1 / H with nulls at k / H (catalogue, dev, A-E: continuously
+  varying; F: intensity switching);
+- rate_random_walk: a walk between rails: the bias random-walks (coefficient K) but is
+  confined to +-K sqrt(1800 s) (a charge or stress walk that saturates at both ends),
+  reflected at the rails: the free walk folded onto the band; stationary, uniform, a sum of
+  exponential modes (Neumann), K^2 tau / 3 at short tau and flattening past ~1000 s
+  (catalogue Gaussian; dev held Laplace; A knots; B jumps; C intermittent; D lagged; E bounded
+  slope; F stick-slip: all unbounded);
+- gauss_markov: a square-law process: the bias is the square of a Gaussian first-order Markov
+  process (a fluctuating quadrature error through a square-law term), mean removed:
+  chi-square marginal (skew 2 sqrt 2, bounded below), continuous paths, autocorrelation
+  exactly exp(-|tau| / tc) with tc half the underlying process's; tc 0.6 s and 15 s
+  (catalogue/A/B continuous Gaussian, dev second order, C telegraph, D Gamma OU, E kangaroo,
+  F trap count);
+- quantization: a counter with hysteresis: the angle counter's comparator counts up only
+  once the angle passes the next code edge by h and down only once it falls h below the
+  present code's edge (a Schmitt trigger against chatter), so the angle error depends on the
+  direction of the last move and follows the angle while inside the dead band; h = 0.22
+  (edge), 2 (weak) and 8 (strong) codes of a 0.6 arcsec counter, step = N sqrt(dt) / 24
+  (catalogue floor; dev/A/B/C/D staircases; E interpolation error; F missing codes: none with
+  memory);
+- resonance: loop peaking: the sensor's force-rebalance loop has a small phase margin, so its
+  sensitivity function S(z), monic and minimum phase (S(inf) = 1), amplifies the sensor's OWN
+  noise near its crossover (31.5 Hz, 22.4 Hz) and attenuates it around it, with zero net log
+  gain (Bode: the mean of ln |S|^2 over frequency is 0): a peak made of the record's own
+  noise, no added process (catalogue, dev, A-F: an added mode's noise).
+
+Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T = n dt, 2 h):
+
+- spike filter: lag-1 autocorrelation of the output against 1 / sqrt(n): given the shared
+  pair (x_k, x_(k+1)) the two outputs depend on independent outer samples, so E[y_k y_(k+1)]
+  is a 2-D integral of products of closed-form conditional means;
+- knocks: every line in a Welch bin (Hann, L = 16384) as set B, z_k = g_k^2 a_k^2 sqrt(n L) /
+  (6 sigma^2) (a_k the line's phase-averaged amplitude, folded lines included), combined in
+  quadrature;
+- gradient bump: matched to its own noise-free waveform, mean removed: z = |s - mean(s)| /
+  sigma;
+- held flicker, railed walk, square-law: Allan variance excess over N^2 / tau in units of the
+  white spread N^2 / tau sqrt(2 / edf), edf = 1.5 T / tau, best tau in [10 dt, T / 10] (held
+  flicker from 10 s): held flicker from its PSD; the railed walk as the sum of its modes'
+  first-order Gauss-Markov variances (odd n, sd 2 sqrt 2 W / (n pi)^2, time 2 W^2 / (K n
+  pi)^2, W the band's width); square-law the first-order formula;
+- hysteresis counter: the angle error e (read = theta - e) is a Markov chain on [-h, step +
+  h) driven by the white angle steps, solved on a 600-state grid; Allan excess times tau^2 =
+  3 c0 - 4 c_m + c_2m - 4 K(m) + K(2m) (c the error's autocovariance, K(m) the summed
+  covariance of the steps with the later errors: the error follows the angle); relative excess
+  at dt less at 10 dt, against sqrt(3 / n + 40 / (3 n));
+- loop peaking: the mean excess |S|^2 - 1 over the band where it exceeds half its peak, times
+  sqrt(T B) (B that band's width): the band power's spread against the white null.
+Edges are set at z ~ 4; weak and strong are 6-510x further above. Physical scale: spike
+thresholds 3.97 sigma (edge, 0.028 rad/s), 3 sigma, 0 (the plain median); knock rings of
+0.035, 0.12 and 0.4 deg/s peak; gradient bumps of 0.0085, 0.057 and 0.23 deg/s peak (with a
+5 degC ambient step, 0.5 degC/min at its steepest: 0.017-0.46 (deg/s)/(degC/min), the strong
+a badly heat-sunk die); rails at +-0.006 to +-0.15 deg/s; hysteresis of 0.13, 1.2 and 4.8
+arcsec; loop peaking of 0.2 dB (edge), 2.3 dB and 6 dB (a ~30 deg phase margin).
+"""
 from functools import lru_cache
 
 from gyro_char.allan.expected import markov_avar
@@ -23,15 +105,8 @@ def spike_filter(x: np.ndarray, thresh: float) -> np.ndarray:
     return y
 
 
-def _segments(lo, hi, c, t):
-    """The parts [p, q] of [lo, hi] outside (c - t, c + t), as two (p, q, nonempty) triples."""
-    q1 = np.minimum(hi, c - t)
-    p2 = np.maximum(lo, c + t)
-    return (lo, q1, q1 > lo), (p2, hi, hi > p2)
-
-
 def spike_moments(c: np.ndarray, k: np.ndarray, t: float):
-    """E[y], E[y^2] of the filtered sample: centre ``c``, one neighbour ``k``, the other N(0, 1)."""
+    """E[y], E[y^2] of the filtered sample: centre ``c``, one neighbour ``k``, other N(0, 1)."""
     lo, hi = np.minimum(c, k), np.maximum(c, k)
     pdf, cdf = stats.norm.pdf, stats.norm.cdf
     m1, m2 = c.copy(), c * c
@@ -39,7 +114,8 @@ def spike_moments(c: np.ndarray, k: np.ndarray, t: float):
         out = np.abs(edge - c) > t
         m1 = m1 + np.where(out, (edge - c) * mass, 0.0)
         m2 = m2 + np.where(out, (edge * edge - c * c) * mass, 0.0)
-    for p, q, ok in _segments(lo, hi, c, t):
+    q1, p2 = np.minimum(hi, c - t), np.maximum(lo, c + t)     # [lo, hi] outside (c -+ t)
+    for p, q, ok in ((lo, q1, q1 > lo), (p2, hi, hi > p2)):
         i1 = pdf(p) - pdf(q) - c * (cdf(q) - cdf(p))
         i2 = (cdf(q) - cdf(p) + p * pdf(p) - q * pdf(q)) - c * c * (cdf(q) - cdf(p))
         m1 = m1 + np.where(ok, i1, 0.0)
@@ -111,8 +187,7 @@ def reflected_modes(k: float, half: float, nmax: int = 99):
 
 
 def schmitt_count(theta: np.ndarray, step: float, hyst: float) -> np.ndarray:
-    """Counter with hysteresis: up once theta passes the next code edge by ``hyst``, down once
-    it falls ``hyst`` below the present code's edge; started at floor(theta_0 / step)."""
+    """Count up past the next code edge + ``hyst``, down below this code's edge - ``hyst``."""
     out = np.empty(theta.size, dtype=np.int64)
     c = int(np.floor(theta[0] / step))
     for i, v in enumerate(theta.tolist()):
@@ -155,10 +230,12 @@ def schmitt_chain(step: float, hyst: float, inc: float, grid: int = CHAIN_GRID):
 
 
 def schmitt_excess(mm: int, step: float, hyst: float, inc: float) -> float:
-    """(m dt)^2 times the Allan excess of the counter at tau = m dt (white angle walk of sd inc).
+    """
+    Return (m dt)^2 times the counter's Allan excess at tau = m dt (angle steps of sd inc).
 
     The read angle is theta - e: 3 c0 - 4 c_m + c_2m - 4 K(m) + K(2m), c the error's
-    autocovariance, K(m) = sum_(l<m) E[delta_i e_(i+l)] (the error follows the walk)."""
+    autocovariance, K(m) = sum_(l<m) E[delta_i e_(i+l)] (the error follows the walk).
+    """
     e, m, p, dvec = schmitt_chain(step, hyst, inc)
     mu = p @ e
     v, kappa, cov = e - mu, [], []
@@ -172,8 +249,7 @@ def schmitt_excess(mm: int, step: float, hyst: float, inc: float) -> float:
 
 
 def peaking(gain: float, freq: float, q: float, dt: float):
-    """(b, a) of the loop's sensitivity S(z): monic biquads, poles at radius e^(-pi f0 dt / q),
-    zeros at e^(-gain pi f0 dt / q), both at f0: a peak of ~gain at f0, S(inf) = 1."""
+    """Return monic (b, a) of S(z): poles e^(-pi f0 dt / q), zeros e^(-gain pi f0 dt / q)."""
     w0 = 2 * np.pi * freq * dt
     rp, rz = np.exp(-np.pi * freq * dt / q), np.exp(-gain * np.pi * freq * dt / q)
     return (np.array([1.0, -2 * rz * np.cos(w0), rz * rz]),
@@ -251,8 +327,7 @@ def scalloping(bins: float) -> float:
 
 
 def knock_lines(f0: float, dt: float, fold: int = 3000):
-    """Frequencies k / P below Nyquist and rms amplitudes (unit ring) of the sampled train's
-    lines: each the lines sampling folds onto it (f + j / dt), power-averaged over the phase."""
+    """Return the lines k / P below Nyquist, rms amplitudes per unit ring, folded lines added."""
     f = np.arange(1, int(0.5 / dt * KNOCK_PERIOD)) / KNOCK_PERIOD
     fa = f[:, None] + np.arange(-fold, fold + 1)[None, :] / dt
     return f, 2 * np.sqrt(np.sum(np.abs(knock_spectrum(fa, f0)) ** 2, axis=1)) / KNOCK_PERIOD

@@ -1,4 +1,63 @@
-"""DOCSTRING"""
+"""
+Held-out swing set G: written blind, without running the diagnosis, run once at the end.
+
+Same interface as ``validate_diagnosis_swing_heldout_f.py``: ``shapes(rate_hz)`` gives
+``{name: (fn, [weak, strong, edge])}``, ``fn(imu_t, gyro, enc_t, enc_angle, stand, rng,
+**params) -> (imu_t, gyro, enc_t, enc_angle)``, ``stand(t)`` the true (angle, rate). Each shape
+is unlike the catalogue's, the development harness's and sets B-F, and the kinds of departure
+differ from shape to shape:
+
+- time_delay: clock skew: the IMU's stamps are rebuilt from its sample counter at the nominal
+  rate while its oscillator runs off by eps (ppm), so the gyro is late by eps (t - t_0): a
+  delay that grows through the run from 0 (catalogue stamps / gyro lag; dev Lagrange; B
+  one-pole; C integrate-dump; D FIR; E isolator: constant delays; F the encoder late,
+  dispersively);
+- g_sensitivity: sense-mass stops: the g-induced deflection of the sense mass is limited by
+  its stops, so the bias follows g_y f_s tanh(f_y / f_s), f_s = 1.6 m/s^2 (the swing's
+  peak f_y is 3.35 m/s^2): linear for small tilts, saturated at the ends of the swing; the
+  fundamental is cut and odd harmonics appear (catalogue, dev: linear; B f_y f_z; C
+  relaxation; D play; E bilinear; F lever arm);
+- scale_factor_nonlinearity: a mode crossing: at one input rate (0.3 rad/s, 17 deg/s) a
+  spurious mode crosses the sense frequency, leaving a local resonance-shaped anomaly in the
+  transfer curve, e0 sign(w) / (1 + ((|w| - 0.3) / 0.02)^2) rad/s, on the gyro's output
+  value (noise included): a localised, odd transfer error, zero elsewhere (catalogue
+  polynomial; dev tanh; B knee; C range switch; D lock-in; E lagged cubic; F periodic ripple);
+- scale_factor_asymmetry: a loose contact: the catalogue's a |w|, present only while a
+  contact in one half of the torquer driver is open; the contact opens and closes at
+  exponential times (mean dwell 90 s both ways): an intermittent asymmetry, on for half the
+  time on average (catalogue constant; dev, B smoothed; C offset; D Schmitt; E after-effect;
+  F warming: never switching off);
+- timestamp_jitter: a double-buffered read-out: the encoder's samples alternate between two
+  buffers whose triggers are skew apart, so the stamps are alternately skew / 2 early and
+  late: a deterministic line at the encoder's Nyquist frequency (catalogue Gaussian; dev
+  uniform; B Gauss-Markov; C heavy-tailed; D sync sawtooth; E packets; F data-dependent);
+- encoder_cyclic_error: multiplexed tracks: one converter reads the sine track skew / 2
+  before the stamp and the cosine track skew / 2 after it (2048 signal periods a turn), so
+  at speed the tracks are out of quadrature by eps = L phi_dot skew and the interpolated
+  angle errs by ~-(eps / 2) cos(2 L phi) / L: a cyclic error whose size follows the speed,
+  none at the turning points (catalogue, dev, B: fixed line harmonics; C triangle; D
+  per-revolution; E random per line; F a local spot).
+
+Levels (``detectability``; 15 min, 1 kHz gyro and encoder, adis16405 preset: A = 20 deg, the
+5 s period, N = 1.89 deg/sqrt(h); s = N sqrt(2 / T) the sd of a fitted rate-residual sine):
+
+- stops: the fundamental of g_y f_s tanh(g sin(A sin wt) / f_s), by quadrature, against s;
+- mode crossing: the lines k >= 2 of the rate error (k = 1 is a scale factor) at the rate A w
+  cos(wt), the anomaly first averaged over the gyro's own noise (sd N sqrt(1 kHz), Gauss-
+  Hermite), summed in quadrature (a matched detector), against s;
+- loose contact: the 2f line of the expected a |w| (half the time on): 0.5 a 4 A w / (3 pi),
+  against s;
+- clock skew, double buffer, multiplexed tracks: matched detector on the noise-free angle
+  residual (-phi_dot eps t for the skew, -phi_dot e for the stamps, the tracks' error with
+  offset and scale fitted out), against the gyro angle noise N^2 / (2 pi f)^2, the encoder's
+  white floor and the preset's stamp jitter (as sets D-F).
+Edges are at z ~ 4 at the 5 s period (at 2.5 s: clock skew 2.3x, loose contact 2x,
+multiplexed tracks 1.9x, double buffer 1.3x, stops 1x, mode crossing 0.7x); weak and strong
+are 3.5-25x further in z. Physical scale: clock errors of 0.165 ppm (edge), 1 and 4 ppm (a
+TCXO's), 0.15-3.6 ms late at 900 s; g_y 5.7e-5 to 5e-4 rad/s/(m/s^2) (0.032-0.28 deg/s/g);
+anomalies of 0.022, 0.11 and 0.34 deg/s; asymmetries of 0.11 %, 0.4 % and 1 %; buffer skews
+of 0.25, 1 and 4 us; track skews of 0.52, 2.5 and 10 us (a multiplexed converter's).
+"""
 from gyro_char.sim.config import BenchConfig
 import numpy as np
 
@@ -28,8 +87,11 @@ def contact(n: int, dt: float, rng) -> np.ndarray:
 
 
 def mux_error(phi: np.ndarray, rate: np.ndarray, skew: float) -> np.ndarray:
-    """Angle error of an interpolator that samples the sine track skew/2 before the stamp and
-    the cosine track skew/2 after it (one multiplexed converter)."""
+    """
+    Return the angle error of an interpolator with one multiplexed converter.
+
+    It samples the sine track skew/2 before the stamp and the cosine track skew/2 after it.
+    """
     u = SIGNAL_LINES * phi
     half = SIGNAL_LINES * rate * skew / 2
     read = np.arctan2(np.sin(u - half), np.cos(u + half))

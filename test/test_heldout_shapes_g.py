@@ -25,8 +25,8 @@ def test_spike_filter_swaps_in_the_median_only_past_the_threshold_lag1_as_comput
     y = fn(x.copy(), None, thresh=t)
     med = np.median(np.c_[x[:-2], x[1:-1], x[2:]], axis=1)
     hit = np.abs(x[1:-1] - med) > t
-    assert np.array_equal(y[1:-1][hit], med[hit]) and np.array_equal(y[1:-1][~hit],
-                                                                      x[1:-1][~hit])
+    assert np.array_equal(y[1:-1][hit], med[hit])
+    assert np.array_equal(y[1:-1][~hit], x[1:-1][~hit])
     assert y[0] == x[0] and y[-1] == x[-1] and np.mean(hit) > 0.02
     assert np.corrcoef(y[:-1], y[1:])[0, 1] == pytest.approx(STATIC.spike_lag1(t), abs=0.006)
 
