@@ -192,3 +192,12 @@ def test_a_refined_grid_is_not_served_the_filter_response_of_another_peaks_grid(
             direct += spec.h2(fr) * (spec.white_int + sum(p(s2) for p in spec.internal))
         direct = 2.0 * direct + 2.0 * spec.output_white
         assert np.allclose(spec.one_sided(f), direct, rtol=1e-9, atol=0)
+
+
+def test_one_static_record_leaves_a_warm_up_and_a_random_walk_unresolved_two_do_not():
+    rng = np.random.default_rng(4)
+    x, y = (7e-4 / np.sqrt(DT) * rng.standard_normal(2 ** 14) for _ in range(2))
+    pair = frozenset({'temperature_drift', 'rate_random_walk'})
+    one = static_expect.closed_form_problem([x], DT, twins=2)
+    two = static_expect.closed_form_problem([x, y], DT, twins=2)
+    assert pair in one.unresolved and pair not in two.unresolved

@@ -274,4 +274,16 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
                    ranges=[lay.ranges for lay in layouts], units=dict(obs.BLOCK_UNITS),
                    baseline=base.to_json(),
                    nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]),
-                   context=base)
+                   context=base, unresolved=unresolved_pairs(len(recs)))
+
+
+def unresolved_pairs(records: int) -> frozenset:
+    """
+    Return the look-alike pairs that ``records`` static records cannot tell apart.
+
+    One record: a warm-up and a rate random walk (a slow bias change is one of either; a
+    second record from switch-on shows whether it recurs).
+    """
+    if records > 1:
+        return frozenset()
+    return frozenset({frozenset({'temperature_drift', 'rate_random_walk'})})
