@@ -21,8 +21,10 @@ the kinds of departure differ from shape to shape:
   trapped and then relaxes by dispersive transport, t^(-1/2): a sparse train of +-steps,
   each with a slowly decaying tail, whose sum is 1/f (PSD b^2 dt / sin(pi f dt)) yet visibly
   event-like, not Gaussian;
-- rate_random_walk: a walking drift rate: the bias's slope itself random-walks (a slowly
-  wandering thermal gradient), an integrated random walk: Allan q^2 tau^3 / 20, smooth paths;
+- rate_random_walk: a walk with memory: stress in the die attach relaxes by creep with
+  power-law kinetics, so the bias walks with persistent increments: fractional Brownian
+  motion (white noise through (1 - z^-1)^-1.25, Hurst 0.75), rate PSD ~ f^-2.5, Allan
+  ~ tau^1.5: steeper than a random walk's tau, smoother paths;
 - gauss_markov: a phase-diffusing beat: a pickup from an oscillator at the sense frequency
   whose relative phase diffuses, bias a cos(phi), phi Brownian: autocorrelation exactly
   (a^2 / 2) exp(-|tau| / tc), bounded arcsine marginal (bimodal), continuous paths;
@@ -38,18 +40,19 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
 - rocking kicks: every line in a Welch bin (Hann, L = 16384) as sets B and G, z_k = g_k^2 a_k^2
   sqrt(n L) / (6 sigma^2), a_k = (4 a / M) |sin(pi k / M)| (M samples a period), in quadrature;
 - table residual: matched to its own noise-free waveform, mean removed: |s - mean(s)| / sigma;
-- trapping, walking drift rate, beat: Allan variance excess over N^2 / tau in units of the
+- trapping, walk with memory, beat: Allan variance excess over N^2 / tau in units of the
   white spread N^2 / tau sqrt(2 / edf), edf = 1.5 T / tau, best tau in [10 dt, T / 10];
 - noise shaping: relative Allan excess at dt less at 10 dt, against sqrt(3 / n + 40 / (3 n));
 - rattle: mean excess p A^2 |H|^2 / sigma^2 over the band above half its peak, times
   sqrt(T B) (p = 3 dt the strike probability per sample, H the sampled ring's response).
 Edges are set at z ~ 4; weak and strong are several to hundreds of times further in z.
-Physical scale: one conversion in 212 (edge), 25 and 2 filled; kicks of 0.019, 0.06 and 0.2
-deg/s for one sample (angle excursions of 0.2-2 mdeg); table residuals of 0.0049, 0.017 and
-0.057 deg/s (tempcos 0.02-0.23 (deg/s)/degC against 0.25 degC cells); trapping b of 5.8e-5
-to 8e-4 rad/s; drift-rate walks q of 3.1e-8 to 6e-7 rad/s^2/sqrt(s) (0.1-2 (deg/h)/min per
-sqrt(min)); beats of 0.02-0.11 deg/s; output steps q of 0.16, 0.3 and 0.6 sigma (0.06-0.24
-deg/s); rattle rings of 0.12-0.8 deg/s per strike (a 37 Hz, 23 Hz mount mode).
+Physical scale: one conversion in 212 (edge), 25 and 2 filled; kicks of 0.11, 0.24 and 0.6
+deg/s for one sample (angle excursions of 1.1-6 mdeg); table residuals of 0.007, 0.023 and
+0.086 deg/s (tempcos 0.028-0.34 (deg/s)/degC against 0.25 degC cells); trapping b of 4.7e-5,
+3e-4 and 8e-4 rad/s (steps b / sqrt(p) of 0.12-2 deg/s, p = dt / 20 s); walks with memory
+driven by q = 1.1e-8, 3e-8 and 1.5e-7 rad/s a sample; beats of 0.018, 0.057 and 0.11 deg/s
+(tc 0.8 s, 0.8 s, 20 s); output steps q of 0.16, 0.3 and 0.6 sigma (0.062-0.24 deg/s); rattle
+rings of 0.14, 0.29 and 0.8 deg/s a strike (a 37 Hz, 37 Hz and 23 Hz mount mode).
 """
 from functools import lru_cache
 
@@ -60,6 +63,7 @@ from scipy import signal
 WELCH_L = 16384
 KICK_SAMPLES = 173                  # samples between kicks (1.73 s at 100 Hz)
 WARM_RISE, WARM_TIME, CELL = 5.0, 1500.0, 0.25     # degC, s, degC: warming and table cell
+WALK_ORDER = 1.25                   # fractional order of the walk with memory
 TRAP_INTERVAL = 20.0                # s: mean time between trapping events
 RATTLE_RATE, RATTLE_DECAY = 3.0, 0.05              # strikes per s; ring decay time, s
 
@@ -117,8 +121,13 @@ def trap_psd(f, b: float, dt: float) -> np.ndarray:
     return b * b * dt / np.sin(np.pi * np.asarray(f) * dt)
 
 
+def walk_psd(f, q: float, dt: float) -> np.ndarray:
+    """One-sided PSD of white noise (sd q a sample) through (1 - z^-1)^-WALK_ORDER."""
+    return 2 * dt * q * q * (2 * np.sin(np.pi * np.asarray(f) * dt)) ** (-2 * WALK_ORDER)
+
+
 def noise_shape(x: np.ndarray, step: float) -> np.ndarray:
-    """Requantize to ``step`` with second-order error feedback: y = x + e_k - 2 e_(k-1) + e_(k-2)."""
+    """Requantize to ``step``, second-order error feedback: y = x + e_k - 2 e_(k-1) + e_(k-2)."""
     y = np.empty_like(x)
     e1 = e2 = 0.0
     for i, v in enumerate(x.tolist()):
@@ -156,9 +165,9 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
         ev = (rng.random(m) < p) * rng.choice([-1.0, 1.0], m) * b / np.sqrt(p)
         return x + signal.fftconvolve(ev, frac_kernel(m))[m - x.size:m]
 
-    def drift_walk(x, rng, q):
-        slope = np.cumsum(rng.standard_normal(x.size)) * q * np.sqrt(dt)
-        return x + np.cumsum(slope) * dt
+    def memory_walk(x, rng, q):
+        w = rng.standard_normal(x.size) * q
+        return x + signal.fftconvolve(w, frac_kernel(x.size, WALK_ORDER))[:x.size]
 
     def beat(x, rng, amplitude, tc):
         phi = rng.uniform(0, 2 * np.pi) + np.cumsum(rng.standard_normal(x.size)) * np.sqrt(
@@ -180,7 +189,7 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
         'temperature_drift': (table, [{'height': 4e-4}, {'height': 1.5e-3},
                                       {'height': 1.22e-4}]),
         'bias_instability': (trapping, [{'b': 3e-4}, {'b': 8e-4}, {'b': 4.73e-5}]),
-        'rate_random_walk': (drift_walk, [{'q': 3e-8}, {'q': 1.5e-7}, {'q': 7.28e-9}]),
+        'rate_random_walk': (memory_walk, [{'q': 3e-8}, {'q': 1.5e-7}, {'q': 1.07e-8}]),
         'gauss_markov': (beat, [{'amplitude': 1e-3, 'tc': 0.8},
                                 {'amplitude': 2e-3, 'tc': 20.0},
                                 {'amplitude': 3.06e-4, 'tc': 0.8}]),
@@ -243,7 +252,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'bias_instability':
         excess = psd_avar(lambda f: trap_psd(f, p['b'], dt), tau, dt)
     elif name == 'rate_random_walk':
-        excess = p['q'] ** 2 * tau ** 3 / 20.0
+        excess = psd_avar(lambda f: walk_psd(f, p['q'], dt), tau, dt)
     else:
         excess = markov_avar(tau, p['tc']) * p['amplitude'] ** 2 / p['tc']
     z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)

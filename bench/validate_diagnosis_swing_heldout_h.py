@@ -38,10 +38,11 @@ Levels (``detectability``; 15 min, 1 kHz gyro and encoder, adis16405 preset: A =
   (-phi_dot d for t past the step at mid-run, -phi_dot (e - mean e) for the stamps, the head's
   error with offset and scale fitted out), against the gyro angle noise N^2 / (2 pi f)^2, the
   encoder's white floor and the preset's stamp jitter (as sets D-G).
-Edges are at z ~ 4 at the 5 s period; weak and strong are 3-40x further in z. Physical scale:
-latency steps of 0.12 (edge), 0.5 and 2 ms; scale-factor changes of 0.2-4 %/g; dead-band
-offsets of 0.0056-0.06 deg/s; square-law terms b of 2.3e-3 to 3e-2 per rad/s; counters of
-0.61-10 us ticks; head tilts of 0.55-6 mrad of line phase.
+Edges are at z ~ 4 at the 5 s period; weak and strong are 3-30x further in z. Physical scale:
+latency steps of 0.108 (edge), 0.5 and 2 ms; scale-factor changes of 0.14, 1 and 3.9 %/g;
+dead-band offsets of 0.011, 0.034 and 0.11 deg/s; square-law terms b of 1.1e-3, 8e-3 and
+3e-2 per rad/s; counter ticks of 0.56, 2.44 and 9.77 us (1.79 MHz, 409.6 kHz, 102.4 kHz);
+head tilts of 0.39, 2 and 6 mrad of line phase between the tracks.
 """
 from gyro_char.sim.config import BenchConfig
 import numpy as np
@@ -100,7 +101,7 @@ def shapes(rate_hz: float) -> dict:
                                                   {'e0': 1.84e-4}]),
         'scale_factor_asymmetry': (square_law, [{'b': 8e-3}, {'b': 3e-2}, {'b': 1.08e-3}]),
         'timestamp_jitter': (counter, [{'tick': 1 / 409.6e3}, {'tick': 1 / 102.4e3},
-                                      {'tick': 5.6e-7}]),
+                                       {'tick': 5.6e-7}]),
         'encoder_cyclic_error': (rocking_head, [{'delta': 2e-3}, {'delta': 6e-3},
                                                 {'delta': 3.94e-4}]),
     }
