@@ -1,10 +1,11 @@
 """The static closed forms against the bench simulator's twins and the IEEE formulas."""
 from gyro_char.diagnosis import expected, spread, static, static_expect
 from gyro_char.diagnosis import observables as obs
-from gyro_char.diagnosis.engine import run
+from gyro_char.diagnosis.engine import evaluate_model, run
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.sim import noise_gen
 from gyro_char.sim.config import BenchConfig, noiseless
+from gyro_char.sim.effects.base import transient_terms
 from gyro_char.sim.simulator import simulate_static
 import numpy as np
 import pytest
@@ -30,6 +31,8 @@ CASES = {
     'temperature_step': [('temperature_drift', {'amplitude': -3e-3, 'tau_s': 15.0,
                                                 't0_s': 70.0})],
     'resonance': [('resonance', {'sigma': 5e-3, 'freq_hz': 19.9, 'q': 25.0}), LOWPASS],
+    'temperature_pulse': [('temperature_drift', {'amplitude': 3e-3, 'tau_s': 12.0,
+                                                 'rise_s': 3.0, 't0_s': 50.0}), LOWPASS],
 }
 
 
@@ -201,3 +204,29 @@ def test_one_static_record_leaves_a_warm_up_and_a_random_walk_unresolved_two_do_
     one = static_expect.closed_form_problem([x], DT, twins=2)
     two = static_expect.closed_form_problem([x, y], DT, twins=2)
     assert pair in one.unresolved and pair not in two.unresolved
+
+
+def test_a_thermal_pulse_mid_record_is_named_with_its_rise_and_onset():
+    # A bias pulse (dT/dt sensed as a temperature change passes): it starts and ends at the
+    # same level, which no warm-up or step from the change point follows.
+    n = 2 ** 16
+    t0 = 0.3 * n * DT
+    truth = [('temperature_drift', {'amplitude': 4e-3, 'tau_s': 40.0, 'rise_s': 10.0,
+                                    't0_s': t0})]
+    x = static.simulate_twin(BASE, n, truth, 6)
+    problem = static_expect.closed_form_problem([x], DT, twins=6, seed=3)
+    d = run(problem, repeats=6, seed=3)
+    assert d.selected_effects[:1] == ['temperature_drift']
+    fitted = dict(d.model)['temperature_drift']
+    assert fitted.get('rise_s', 0.0) > 0.0
+    assert fitted['t0_s'] == pytest.approx(t0, abs=20.0)
+    # Rise and amplitude trade off on 655 s of this noise; the waveform is what is pinned.
+    t = np.arange(n) * DT
+
+    def wave(p):
+        s = np.maximum(t - p['t0_s'], 0.0)
+        return sum(c * np.exp(-s / lag)
+                   for c, lag in transient_terms(p['amplitude'], p['tau_s'], p['rise_s']))
+    assert np.sqrt(np.mean((wave(fitted) - wave(truth[0][1])) ** 2)) < 0.1 * 4e-3
+    at_truth = evaluate_model(problem, truth, repeats=6, seed=3).gap
+    assert d.final_gap < min(0.3 * d.baseline_gap, at_truth)

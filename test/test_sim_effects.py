@@ -153,6 +153,27 @@ def test_temperature_drift_exponential_recovered():
     assert abs(off) < 2e-5
 
 
+def test_temperature_pulse_peaks_at_its_amplitude_and_returns_to_zero():
+    # rise_s > 0: a (e^(-s/tau) - e^(-s/rise)) / peak from t0 on, 0 before: its maximum is
+    # the amplitude, at s* = tau rise ln(tau / rise) / (tau - rise); rise_s 0 is the step.
+    cfg = _quiet(100.0, 0.0)
+    amp, tau, rise, t0 = 0.003, 120.0, 30.0, 200.0
+    run = simulate_static(cfg, duration=1500.0, seed=3, channels=['gyro_x'],
+                          effects=[f'temperature_drift:amplitude={amp},tau_s={tau},'
+                                   f'rise_s={rise},t0_s={t0}'])
+    x, t = run.imu.channels['gyro_x'], run.imu.t
+    x = x - x[-1]
+    assert np.all(np.abs(x[t < t0 - 1.0]) < 1e-5)
+    s_peak = tau * rise * np.log(tau / rise) / (tau - rise)
+    assert x.max() == pytest.approx(amp, rel=1e-3)
+    assert t[np.argmax(x)] == pytest.approx(t0 + s_peak, abs=1.0)
+    assert abs(x[t > t0 + 10 * tau]).max() < 1e-3 * amp
+    assert 'rise_s' in run.truth['effects'][0]['params']
+    step = simulate_static(cfg, duration=60.0, seed=3, channels=['gyro_x'],
+                           effects=['temperature_drift:amplitude=0.003,tau_s=20'])
+    assert 'rise_s' not in step.truth['effects'][0]['params']
+
+
 def test_bias_instability_floor_and_truth():
     b = 2e-4
     cfg = _quiet(50.0, 1e-5)

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence, Tuple
 
 from gyro_char.allan.expected import moving_average_kernel
+from gyro_char.sim.effects.base import transient_terms
 from gyro_char.sim.effects.sensor import resonance_coefficients
 import numpy as np
 
@@ -252,5 +253,6 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
             power = 0.5 * p['amplitude'] ** 2 * float(spec.h2(np.array([fa]))[0])
             spec.lines.append((float(fold(fa, 1.0 / dt)), power))
         elif name == 'temperature_drift':
-            spec.warmups.append((p['amplitude'], p['tau_s'], p.get('t0_s', 0.0)))
+            for c, lag in transient_terms(p['amplitude'], p['tau_s'], p.get('rise_s', 0.0)):
+                spec.warmups.append((c, lag, p.get('t0_s', 0.0)))
     return spec

@@ -159,6 +159,12 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     cum = np.cumsum(y)
     k = int(np.argmax(np.abs(cum)))
     onset, step_sign = k * dt, (1.0 if cum[k] >= 0.0 else -1.0)
+    # A pulse (a bias sensing dT/dt as a temperature change passes): from the largest
+    # excursion of the record averaged over 1/64 of its length, with its sign.
+    w = max(n // 64, 1)
+    smooth = (cum[w:] - cum[:-w]) / w if n > w else y
+    j = int(np.argmax(np.abs(smooth)))
+    pulse = ((j + w / 2) * dt, 1.0 if smooth[j] >= 0.0 else -1.0)
     k_long = sig_long / np.sqrt(tau_max)
     # Upper bounds from the record itself as well: on a long record a strong random walk or
     # flicker floor can sit far above 30x the white noise's Allan deviation at the longest tau.
@@ -191,7 +197,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt)),
             Param('dither', 0, 1, integer=True, choice=True)]),
         'temperature_drift': warm_up_space(sig_long, sig_sample, length, warm_sign,
-                                           onset, step_sign),
+                                           onset, step_sign, pulse),
         # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
         # line between bins spreads its power differently from one on a bin).
         'vibration': EffectSpace('vibration', [
@@ -209,24 +215,33 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
 
 
 def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
-                  onset: float, step_sign: float) -> EffectSpace:
+                  onset: float, step_sign: float, pulse=None) -> EffectSpace:
     """
-    ``temperature_drift``'s search: a warm-up from power-on, or one that started later.
+    ``temperature_drift``'s search: a warm-up from power-on, one that started later, a pulse.
 
-    The power-on form (amplitude, lag); and, as an alternative start, the onset ``t0_s`` at
-    the record's change point with the sign there: amplitude and lag fitted around it, then
-    the onset (a draught, a heater switching mid-record). The better of the two is kept.
+    The power-on form (amplitude, lag); and, as alternative starts, the onset ``t0_s`` at the
+    record's change point with the sign there (a draught, a heater switching mid-record), and
+    a pulse (``rise_s``) rising before ``pulse`` = (time of the largest excursion, its sign).
+    Each alternative fits amplitude and lags around its start, then the onset; the best of
+    them is kept.
     """
+    lag = Param('tau_s', length / 200, length / 2)
     power_on = EffectSpace('temperature_drift', [
-        Param('amplitude', amp_lo, amp_hi, sign=warm_sign),
-        Param('tau_s', length / 200, length / 2)])
+        Param('amplitude', amp_lo, amp_hi, sign=warm_sign), lag])
+    others = []
     t0 = Param('t0_s', 0.01 * length, 0.9 * length, log=False, off_at='lo', init=onset)
-    if not t0.lo < onset < t0.hi:
-        return power_on
-    later = EffectSpace('temperature_drift', [
-        Param('amplitude', amp_lo, amp_hi, sign=step_sign),
-        Param('tau_s', length / 200, length / 2), t0])
-    return replace(power_on, alternatives=(later,))
+    if t0.lo < onset < t0.hi:
+        others.append(EffectSpace('temperature_drift', [
+            Param('amplitude', amp_lo, amp_hi, sign=step_sign), lag, t0]))
+    if pulse is not None:
+        at, sign = pulse
+        start = min(max(at - length / 50, t0.lo), t0.hi)
+        others.append(EffectSpace('temperature_drift', [
+            Param('amplitude', amp_lo, amp_hi, sign=sign),
+            Param('tau_s', length / 400, length / 4),
+            Param('rise_s', length / 4000, length / 20),
+            replace(t0, init=start)]))
+    return replace(power_on, alternatives=tuple(others))
 
 
 def checked_records(records: Sequence, dt: float, max_samples: Optional[int] = None):

@@ -169,6 +169,24 @@ def one_pole(x: np.ndarray, lag_s: float, dt: float, start: str = 'first') -> np
     return signal.lfilter(b, den, x, axis=-1, zi=zi)[0]
 
 
+def transient_terms(amplitude: float, tau_s: float, rise_s: float = 0.0) -> list:
+    """
+    Return a bias transient as (coefficient, lag) terms c exp(-(t - t0) / lag), held before t0.
+
+    ``rise_s`` 0: one term, the step or warm-up of ``amplitude``. ``rise_s`` > 0: a pulse of
+    peak ``amplitude``, zero before t0 and long after, a (e^(-s / tau) - e^(-s / rise)) / peak:
+    the response of a bias that senses the temperature's rate of change (a gradient across the
+    die) to a temperature step passing through two lags.
+    """
+    if rise_s <= 0.0:
+        return [(amplitude, tau_s)]
+    if abs(tau_s - rise_s) < 1e-6 * tau_s:
+        rise_s = tau_s * (1.0 - 1e-6)          # the equal-lag limit, s/tau e^(-s/tau)
+    s_peak = tau_s * rise_s * np.log(tau_s / rise_s) / (tau_s - rise_s)
+    peak = np.exp(-s_peak / tau_s) - np.exp(-s_peak / rise_s)
+    return [(amplitude / peak, tau_s), (-amplitude / peak, rise_s)]
+
+
 def describe_without(effect: Effect, *optional: str) -> dict:
     """``describe()`` leaving out optional parameters at their default 0 (earlier truth.json)."""
     out = Effect.describe(effect)

@@ -10,7 +10,7 @@ from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
-from gyro_char.sim.effects.base import describe_without, Effect, register
+from gyro_char.sim.effects.base import describe_without, Effect, register, transient_terms
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
@@ -109,22 +109,27 @@ class TemperatureDrift(Effect):
                'drift the linear-drift state only partly absorbs. t0_s > 0: the transient '
                'starts mid-record (a draught, a door, a heater or fan switching): the bias '
                'holds amplitude until t0_s, then settles through the same lag, '
-               'amplitude exp(-(t - t0_s) / tau_s).')
+               'amplitude exp(-(t - t0_s) / tau_s). rise_s > 0: a pulse instead, of peak '
+               'amplitude, rising with rise_s and decaying with tau_s, zero before t0_s and '
+               'long after (a bias sensing dT/dt under a passing temperature change).')
     PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0 (before t0_s)'),
               'tau_s': (600.0, 's', 'thermal time constant'),
               't0_s': (0.0, 's', 'when the transient starts (0: at power-on)'),
+              'rise_s': (0.0, 's', 'rise time of a pulse (0: a step, no pulse)'),
               'axis': _axis_param()}
 
     def check(self):
         _rows(self)
-        if self.tau_s <= 0 or self.t0_s < 0:
-            raise InputError('temperature_drift: tau_s must be > 0 and t0_s >= 0')
+        if self.tau_s <= 0 or self.t0_s < 0 or self.rise_s < 0:
+            raise InputError('temperature_drift: tau_s must be > 0, t0_s and rise_s >= 0')
 
     def describe(self):
-        return describe_without(self, 't0_s')
+        return describe_without(self, 't0_s', 'rise_s')
 
     def sensor(self, ctx, gyro, accel):
-        shape = self.amplitude * np.exp(-np.maximum(ctx.t - self.t0_s, 0.0) / self.tau_s)
+        since = np.maximum(ctx.t - self.t0_s, 0.0)
+        shape = sum(c * np.exp(-since / lag)
+                    for c, lag in transient_terms(self.amplitude, self.tau_s, self.rise_s))
         gyro = gyro.copy()
         for r in _rows(self):
             gyro[r] += shape
