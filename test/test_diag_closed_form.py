@@ -230,3 +230,18 @@ def test_a_thermal_pulse_mid_record_is_named_with_its_rise_and_onset():
     assert np.sqrt(np.mean((wave(fitted) - wave(truth[0][1])) ** 2)) < 0.1 * 4e-3
     at_truth = evaluate_model(problem, truth, repeats=6, seed=3).gap
     assert d.final_gap < min(0.3 * d.baseline_gap, at_truth)
+
+
+def test_a_pulse_is_searched_where_an_excursion_stands_out_not_on_flicker_wander():
+    def has_pulse(x):
+        space = static.static_spaces(BASE, x, ['temperature_drift'])[0]
+        return any('rise_s' in {p.name for p in sp.params} for sp in space.alternatives)
+    n = 2 ** 17
+    rng = np.random.default_rng(8)
+    white = BASE.N / np.sqrt(DT) * rng.standard_normal(n)
+    flicker = white + 3e-3 * noise_gen.flicker(n, rng)      # flicker far above the white
+    t = np.arange(n) * DT
+    s = np.maximum(t - 400.0, 0.0)
+    pulse = white + 3e-3 * (np.exp(-s / 60.0) - np.exp(-s / 15.0)) / 0.47
+    assert not has_pulse(white) and not has_pulse(flicker)
+    assert has_pulse(pulse)
