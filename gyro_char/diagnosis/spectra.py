@@ -17,6 +17,7 @@ for one model; every observable's expectation is a linear functional of it
 """
 from collections import OrderedDict
 from dataclasses import dataclass, field
+import threading
 from typing import Callable, List, Optional, Sequence, Tuple
 
 from gyro_char.allan.expected import moving_average_kernel
@@ -94,6 +95,7 @@ def fold(f, rate: float):
 
 
 _IMAGES: 'OrderedDict[tuple, list]' = OrderedDict()
+_IMAGES_LOCK = threading.Lock()
 IMAGE_CACHE = 8         # grids whose images are kept (~10 MB each for the Allan grids)
 
 
@@ -154,10 +156,11 @@ class ModelSpectrum:
         one sine and cosine of the grid (x + pi r / D, by angle addition).
         """
         key = (self.taps, self.stages, self.decimation, self.dt, f.tobytes())
-        hit = _IMAGES.get(key)
-        if hit is not None:
-            _IMAGES.move_to_end(key)
-            return hit
+        with _IMAGES_LOCK:        # a Dask worker may run several diagnoses in threads
+            hit = _IMAGES.get(key)
+            if hit is not None:
+                _IMAGES.move_to_end(key)
+                return hit
         x = np.pi * self.dt_i * f
         sx, cx = np.sin(x), np.cos(x)
         if self.taps > 1:
@@ -172,9 +175,10 @@ class ModelSpectrum:
             else:
                 h2 = np.ones_like(f)
             out.append((np.maximum(s * s, 1e-300), h2))
-        _IMAGES[key] = out
-        if len(_IMAGES) > IMAGE_CACHE:
-            _IMAGES.popitem(last=False)
+        with _IMAGES_LOCK:
+            _IMAGES[key] = out
+            while len(_IMAGES) > IMAGE_CACHE:
+                _IMAGES.popitem(last=False)
         return out
 
     def one_sided(self, f, parts: Optional[Sequence[int]] = None) -> np.ndarray:
