@@ -44,8 +44,8 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
   10 dt, against sqrt(3 / n + 40 / (3 n)).
 Edges are set at z ~ 4; weak and strong are 8-1600x further above.
 """
-from gyro_char.allan.expected import markov_avar
 from gyro_char.sim.effects.sensor import resonance_coefficients
+from heldout_detect import gm_avar
 import numpy as np
 from scipy import signal
 
@@ -143,11 +143,6 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
                                   {'sigma': 0.8 * sig, 'freq': 6.2, 'q': 30.0},
                                   {'sigma': 0.053 * sig, 'freq': 33.0, 'q': 30.0}]),
     }
-
-
-def gm_avar(tau, sigma, tc):
-    """Allan variance of exponentially correlated noise of sd ``sigma`` (q^2 = 2 sigma^2 / tc)."""
-    return markov_avar(tau, tc) * 2 * sigma ** 2 / tc
 
 
 def lag1(cutoff: float) -> float:

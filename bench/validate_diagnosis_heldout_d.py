@@ -56,6 +56,7 @@ steps (0.06-0.48 deg/s) are a DSP output word cut to 8-11 bits; the Duffing shif
 4 % of f0.
 """
 from gyro_char.allan.expected import markov_avar
+from heldout_detect import gm_avar
 import numpy as np
 from scipy import signal
 
@@ -166,11 +167,6 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
                                 {'sigma': 0.8 * sig, 'freq': 12.5, 'q': 30.0},
                                 {'sigma': 0.052 * sig, 'freq': 27.5, 'q': 30.0}]),
     }
-
-
-def gm_avar(tau, sigma, tc):
-    """Allan variance of exponentially correlated noise of sd ``sigma`` (q^2 = 2 sigma^2 / tc)."""
-    return markov_avar(tau, tc) * 2 * sigma ** 2 / tc
 
 
 def lag1(cutoff: float) -> float:

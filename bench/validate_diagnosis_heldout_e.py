@@ -66,9 +66,7 @@ over a +-25 degC oven ramp; the interpolation errors (3-15 % of a 0.28-0.42 mrad
 trimmed to a badly trimmed detector pair; the strong ODR mismatch is an 85 Hz ODR polled at
 100 Hz, the edge's 0.5 % an RC oscillator's tolerance.
 """
-from functools import lru_cache
-
-from gyro_char.allan.expected import markov_avar
+from heldout_detect import gm_avar, psd_avar
 import numpy as np
 from scipy import signal
 
@@ -170,11 +168,6 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
     }
 
 
-def gm_avar(tau, sigma, tc):
-    """Allan variance of exponentially correlated noise of sd ``sigma`` (q^2 = 2 sigma^2 / tc)."""
-    return markov_avar(tau, tc) * 2 * sigma ** 2 / tc
-
-
 def scalloping(bins: float) -> float:
     """Amplitude gain of a Hann window of ``WELCH_L`` for a line ``bins`` bins from 0 (mod 1)."""
     delta = bins - np.round(bins)
@@ -193,23 +186,6 @@ def heater_psd(f, k):
     """One-sided PSD of the integrated telegraph of RRW coefficient ``k``."""
     v2 = k * k / (2 * FLIP_TC)
     return 4 * v2 * FLIP_TC / (1 + (2 * np.pi * f * FLIP_TC) ** 2) / (2 * np.pi * f) ** 2
-
-
-@lru_cache(maxsize=8)
-def _grid(dt: float):
-    return np.geomspace(1e-9, 0.5 / dt, 40000)
-
-
-def psd_avar(psd, tau: np.ndarray, dt: float) -> np.ndarray:
-    """Allan variance 2 int S(f) sin^4(pi f tau) / (pi f tau)^2 df of a one-sided PSD."""
-    f = _grid(dt)
-    s = psd(f)
-    out = []
-    for tt in np.atleast_1d(tau):
-        x = np.pi * f * tt
-        k = np.where(f * tt > 30, 3.0 / 8.0, np.sin(x) ** 4) / x ** 2
-        out.append(2 * np.trapezoid(s * k, f))
-    return np.array(out)
 
 
 def interp_cov(m, step: float, depth: float, inc: float, mu_dt: float = 0.0) -> np.ndarray:

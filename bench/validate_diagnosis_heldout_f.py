@@ -84,7 +84,7 @@ of 4, 16 and 32 codes (2.4, 9.6 and 19 arcsec).
 """
 from functools import lru_cache
 
-from gyro_char.allan.expected import markov_avar
+from heldout_detect import gm_avar, psd_avar
 import numpy as np
 from scipy import signal, special, stats
 
@@ -266,28 +266,6 @@ def hunting_lines(freq: float, kmax: int = 8):
 def flicker_psd(f, b, dt):
     """One-sided PSD of the flicker at mean intensity (sampled kernel, exact): b^2 / (pi f)."""
     return 2 * b * b * dt / (2 * np.sin(np.pi * f * dt))
-
-
-@lru_cache(maxsize=8)
-def _grid(dt: float):
-    return np.geomspace(1e-9, 0.5 / dt, 40000)
-
-
-def psd_avar(psd, tau: np.ndarray, dt: float) -> np.ndarray:
-    """Allan variance 2 int S(f) sin^4(pi f tau) / (pi f tau)^2 df of a one-sided PSD."""
-    f = _grid(dt)
-    s = psd(f)
-    out = []
-    for tt in np.atleast_1d(tau):
-        x = np.pi * f * tt
-        k = np.where(f * tt > 30, 3.0 / 8.0, np.sin(x) ** 4) / x ** 2
-        out.append(2 * np.trapezoid(s * k, f))
-    return np.array(out)
-
-
-def gm_avar(tau, sigma, tc):
-    """Allan variance of exponentially correlated noise of sd ``sigma`` (q^2 = 2 sigma^2 / tc)."""
-    return markov_avar(tau, tc) * 2 * sigma ** 2 / tc
 
 
 def stuck_coefficients(step: float, bit: int, m: int = 4096) -> np.ndarray:

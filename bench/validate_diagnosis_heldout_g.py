@@ -83,7 +83,7 @@ arcsec; loop peaking of 0.2 dB (edge), 2.3 dB and 6 dB (a ~30 deg phase margin).
 """
 from functools import lru_cache
 
-from gyro_char.allan.expected import markov_avar
+from heldout_detect import gm_avar, psd_avar
 import numpy as np
 from scipy import signal, stats
 
@@ -331,28 +331,6 @@ def knock_lines(f0: float, dt: float, fold: int = 3000):
     f = np.arange(1, int(0.5 / dt * KNOCK_PERIOD)) / KNOCK_PERIOD
     fa = f[:, None] + np.arange(-fold, fold + 1)[None, :] / dt
     return f, 2 * np.sqrt(np.sum(np.abs(knock_spectrum(fa, f0)) ** 2, axis=1)) / KNOCK_PERIOD
-
-
-@lru_cache(maxsize=8)
-def _grid(dt: float):
-    return np.geomspace(1e-9, 0.5 / dt, 40000)
-
-
-def psd_avar(psd, tau: np.ndarray, dt: float) -> np.ndarray:
-    """Allan variance 2 int S(f) sin^4(pi f tau) / (pi f tau)^2 df of a one-sided PSD."""
-    f = _grid(dt)
-    s = psd(f)
-    out = []
-    for tt in np.atleast_1d(tau):
-        x = np.pi * f * tt
-        k = np.where(f * tt > 30, 3.0 / 8.0, np.sin(x) ** 4) / x ** 2
-        out.append(2 * np.trapezoid(s * k, f))
-    return np.array(out)
-
-
-def gm_avar(tau, sigma, tc):
-    """Allan variance of exponentially correlated noise of sd ``sigma`` (q^2 = 2 sigma^2 / tc)."""
-    return markov_avar(tau, tc) * 2 * sigma ** 2 / tc
 
 
 def peaking_band(gain: float, freq: float, q: float, dt: float):

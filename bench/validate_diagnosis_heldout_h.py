@@ -54,9 +54,8 @@ driven by q = 1.1e-8, 3e-8 and 1.5e-7 rad/s a sample; beats of 0.018, 0.057 and 
 (tc 0.8 s, 0.8 s, 20 s); output steps q of 0.16, 0.3 and 0.6 sigma (0.062-0.24 deg/s); rattle
 rings of 0.14, 0.29 and 0.8 deg/s a strike (a 37 Hz, 37 Hz and 23 Hz mount mode).
 """
-from functools import lru_cache
-
 from gyro_char.allan.expected import markov_avar
+from heldout_detect import psd_avar
 import numpy as np
 from scipy import signal
 
@@ -199,23 +198,6 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
                                {'amplitude': 1.4e-2, 'freq': 23.0},
                                {'amplitude': 2.48e-3, 'freq': 37.0}]),
     }
-
-
-@lru_cache(maxsize=8)
-def _grid(dt: float):
-    return np.geomspace(1e-9, 0.5 / dt, 40000)
-
-
-def psd_avar(psd, tau: np.ndarray, dt: float) -> np.ndarray:
-    """Allan variance 2 int S(f) sin^4(pi f tau) / (pi f tau)^2 df of a one-sided PSD."""
-    f = _grid(dt)
-    s = psd(f)
-    out = []
-    for tt in np.atleast_1d(tau):
-        x = np.pi * f * tt
-        k = np.where(f * tt > 30, 3.0 / 8.0, np.sin(x) ** 4) / x ** 2
-        out.append(2 * np.trapezoid(s * k, f))
-    return np.array(out)
 
 
 def rattle_band(amplitude: float, freq: float, dt: float, sig: float):

@@ -47,6 +47,7 @@ hysteresis 1x, lock-in 0.5x: the swing spends less time in its dead band); weak 
 strong disk error (eccentricity 3 mrad) is a magnetic or low-grade optical encoder's.
 """
 from gyro_char.sim.config import BenchConfig
+from heldout_detect import matched_z
 import numpy as np
 from scipy import signal
 
@@ -140,14 +141,6 @@ def lines(err, amp: float, k: int, m: int = 200000) -> float:
     y = err(amp * np.cos(th), th)[m:]
     th = th[m:]
     return float(2 * np.hypot(np.mean(y * np.cos(k * th)), np.mean(y * np.sin(k * th))))
-
-
-def matched_z(residual: np.ndarray, rate_hz: float, n_arw: float, floor: float) -> float:
-    """Matched-detector z of a deterministic angle residual on the run's grid (docstring)."""
-    n = residual.size
-    f = np.fft.fftfreq(n, 1.0 / rate_hz)
-    s_n = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-    return float(np.sqrt(np.sum(np.abs(np.fft.fft(residual)) ** 2 / (n * rate_hz * s_n))))
 
 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,

@@ -59,6 +59,7 @@ hard), the weak 0.6 %; packet latencies uniform in +-60 us (a USB high-speed mic
 from functools import lru_cache
 
 from gyro_char.sim.config import BenchConfig
+from heldout_detect import matched_z
 import numpy as np
 from scipy import signal
 
@@ -150,14 +151,6 @@ def lines(err, amp: float, k: int, period_s: float, m: int = 20000, settle: int 
     y = err(amp * np.cos(th), period_s / m)[-m:]
     th = th[-m:]
     return float(2 * np.hypot(np.mean(y * np.cos(k * th)), np.mean(y * np.sin(k * th))))
-
-
-def matched_z(residual: np.ndarray, rate_hz: float, n_arw: float, floor: float) -> float:
-    """Matched-detector z of a deterministic angle residual on the run's grid (as set D)."""
-    n = residual.size
-    f = np.fft.fftfreq(n, 1.0 / rate_hz)
-    s_n = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-    return float(np.sqrt(np.sum(np.abs(np.fft.fft(residual)) ** 2 / (n * rate_hz * s_n))))
 
 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,

@@ -67,6 +67,7 @@ settled asymmetries 0.03-0.6 %; character times of 1.8 Mbaud (edge), 460.8 kbaud
 115.2 kbaud (strong) links; spot depths 0.18 %, 1.5 %, 8 %.
 """
 from gyro_char.sim.config import BenchConfig
+from heldout_detect import fourier, matched_z
 import numpy as np
 from scipy import special
 
@@ -151,21 +152,6 @@ def shapes(rate_hz: float) -> dict:
         'encoder_cyclic_error': (dirty_scale, [{'depth': 0.015}, {'depth': 0.08},
                                                {'depth': 0.00176}]),
     }
-
-
-def fourier(err, amp: float, k: int, m: int = 20000) -> float:
-    """Magnitude of harmonic ``k`` of the memoryless ``err(W cos(theta))`` over one period."""
-    th = np.arange(m) * 2 * np.pi / m
-    y = err(amp * np.cos(th), th)
-    return float(2 * np.hypot(np.mean(y * np.cos(k * th)), np.mean(y * np.sin(k * th))))
-
-
-def matched_z(residual: np.ndarray, rate_hz: float, n_arw: float, floor: float) -> float:
-    """Matched-detector z of a deterministic angle residual on the run's grid (as set D)."""
-    n = residual.size
-    f = np.fft.fftfreq(n, 1.0 / rate_hz)
-    s_n = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-    return float(np.sqrt(np.sum(np.abs(np.fft.fft(residual)) ** 2 / (n * rate_hz * s_n))))
 
 
 def inl_lines(e0: float, amp: float, kmax: int = 60) -> np.ndarray:

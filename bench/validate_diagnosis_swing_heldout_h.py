@@ -45,6 +45,7 @@ dead-band offsets of 0.011, 0.034 and 0.11 deg/s; square-law terms b of 1.1e-3, 
 head tilts of 0.39, 2 and 6 mrad of line phase between the tracks.
 """
 from gyro_char.sim.config import BenchConfig
+from heldout_detect import fourier, matched_z
 import numpy as np
 
 G0 = 9.80665
@@ -107,26 +108,11 @@ def shapes(rate_hz: float) -> dict:
     }
 
 
-def fourier(err, amp: float, k: int, m: int = 20000) -> float:
-    """Magnitude of harmonic ``k`` of the memoryless ``err(W cos(theta), theta)``, one period."""
-    th = np.arange(m) * 2 * np.pi / m
-    y = err(amp * np.cos(th), th)
-    return float(2 * np.hypot(np.mean(y * np.cos(k * th)), np.mean(y * np.sin(k * th))))
-
-
 def smoothed_offset(w: np.ndarray, e0: float, s_n: float) -> np.ndarray:
     """Mean of ``sign_offset`` over the gyro's own noise (sd s_n) at the true rate ``w``."""
     x, wt = np.polynomial.hermite_e.hermegauss(HERMITE)
     wt = wt / wt.sum()
     return np.sum(wt * sign_offset(np.asarray(w)[..., None] + s_n * x, e0), axis=-1)
-
-
-def matched_z(residual: np.ndarray, rate_hz: float, n_arw: float, floor: float) -> float:
-    """Matched-detector z of a deterministic angle residual on the run's grid (as set D)."""
-    n = residual.size
-    f = np.fft.fftfreq(n, 1.0 / rate_hz)
-    s_n = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-    return float(np.sqrt(np.sum(np.abs(np.fft.fft(residual)) ** 2 / (n * rate_hz * s_n))))
 
 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,

@@ -1,0 +1,53 @@
+"""
+Detectability arithmetic the held-out shape sets share (where their edge levels come from).
+
+The sets themselves were written blind, one author each; these are the pieces of their
+``detectability`` that came out the same: the Allan variance of a one-sided PSD and of a
+first-order Gauss-Markov process (static), a matched detector for a deterministic angle
+residual and the harmonic of a memoryless rate error (swing).
+"""
+from functools import lru_cache
+
+from gyro_char.allan.expected import markov_avar
+import numpy as np
+
+
+@lru_cache(maxsize=8)
+def _grid(dt: float):
+    return np.geomspace(1e-9, 0.5 / dt, 40000)
+
+
+def psd_avar(psd, tau: np.ndarray, dt: float) -> np.ndarray:
+    """Allan variance 2 int S(f) sin^4(pi f tau) / (pi f tau)^2 df of a one-sided PSD."""
+    f = _grid(dt)
+    s = psd(f)
+    out = []
+    for tt in np.atleast_1d(tau):
+        x = np.pi * f * tt
+        k = np.where(f * tt > 30, 3.0 / 8.0, np.sin(x) ** 4) / x ** 2
+        out.append(2 * np.trapezoid(s * k, f))
+    return np.array(out)
+
+
+def gm_avar(tau, sigma, tc):
+    """Allan variance of exponentially correlated noise of sd ``sigma`` (q^2 = 2 sigma^2 / tc)."""
+    return markov_avar(tau, tc) * 2 * sigma ** 2 / tc
+
+
+def matched_z(residual: np.ndarray, rate_hz: float, n_arw: float, floor: float) -> float:
+    """
+    Matched-detector z of a deterministic angle residual on a run's grid.
+
+    Against the gyro's angle noise n_arw^2 / (2 pi f)^2 plus a white ``floor`` (encoder, stamps).
+    """
+    n = residual.size
+    f = np.fft.fftfreq(n, 1.0 / rate_hz)
+    s_n = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
+    return float(np.sqrt(np.sum(np.abs(np.fft.fft(residual)) ** 2 / (n * rate_hz * s_n))))
+
+
+def fourier(err, amp: float, k: int, m: int = 20000) -> float:
+    """Magnitude of harmonic ``k`` of the memoryless ``err(W cos(theta), theta)``, one period."""
+    th = np.arange(m) * 2 * np.pi / m
+    y = err(amp * np.cos(th), th)
+    return float(2 * np.hypot(np.mean(y * np.cos(k * th)), np.mean(y * np.sin(k * th))))
