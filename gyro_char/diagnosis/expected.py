@@ -113,6 +113,13 @@ def _trapz(y, x):
     return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)))
 
 
+def _trapz_weights(nu: np.ndarray, starts=(0,)) -> np.ndarray:
+    """Trapezoid weights on ``nu``: several grids end to end (at ``starts``), each its own."""
+    d = 0.5 * np.diff(nu)
+    d[np.asarray(starts[1:], dtype=int) - 1] = 0.0       # no interval across two grids
+    return np.r_[d, 0.0] + np.r_[0.0, d]
+
+
 def _kernel_weights(nu: np.ndarray, mm, starts=(0,)) -> np.ndarray:
     """
     Return the Allan kernel 2 sin^4(pi nu m) / (m^2 sin^2(pi nu)) times trapezoid weights.
@@ -121,12 +128,9 @@ def _kernel_weights(nu: np.ndarray, mm, starts=(0,)) -> np.ndarray:
     cluster size per point; each grid's weights are its own.
     """
     s = np.sin(np.pi * nu)
-    d = 0.5 * np.diff(nu)
-    d[np.asarray(starts[1:], dtype=int) - 1] = 0.0       # no interval across two grids
-    w = np.r_[d, 0.0] + np.r_[0.0, d]
     q = np.sin(np.pi * nu * mm)
     q *= q
-    return 2.0 * q * q / (mm * mm * s * s) * w
+    return 2.0 * q * q / (mm * mm * s * s) * _trapz_weights(nu, starts)
 
 
 def _exact_region(spec: ModelSpectrum, g: Grids):
@@ -221,9 +225,7 @@ def acf_integrals(spec: ModelSpectrum, g: Grids, lags: int):
     keep = g.g_detrend if nu.size == g.nu_log.size else _detrend_keep(nu * g.n)
     r0 = _trapz(s * keep, nu)
     k = np.arange(1, lags + 1)
-    d = 0.5 * np.diff(nu)
-    w = s * (np.r_[d, 0.0] + np.r_[0.0, d])                  # trapezoid weights
-    dk = 4.0 * (np.sin(np.pi * np.outer(k, nu)) ** 2 @ w)   # 2 (1 - cos 2 pi nu k)
+    dk = 4.0 * (np.sin(np.pi * np.outer(k, nu)) ** 2 @ (s * _trapz_weights(nu)))  # 2(1 - cos)
     for f0, power in spec.lines:
         x = f0 * g.dt
         r0 += power * float(_detrend_keep(np.array([x * g.n]))[0])
