@@ -35,7 +35,7 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
   sqrt(f0 / q)) (against the white null, so the bursts' statistics do not enter).
 Edges are set at z ~ 4 (a few sigma); weak and strong are 6-800x further above.
 """
-from gyro_char.sim.effects.sensor import resonance_coefficients
+from gyro_char.sim.effects.vibration import resonance_coefficients
 import numpy as np
 from scipy import signal
 

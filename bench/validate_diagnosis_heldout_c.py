@@ -44,7 +44,7 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
   10 dt, against sqrt(3 / n + 40 / (3 n)).
 Edges are set at z ~ 4; weak and strong are 8-1600x further above.
 """
-from gyro_char.sim.effects.sensor import resonance_coefficients
+from gyro_char.sim.effects.vibration import resonance_coefficients
 from heldout_detect import gm_avar
 import numpy as np
 from scipy import signal

@@ -53,3 +53,21 @@ def test_a_strong_random_walk_is_named_so_not_a_gauss_markov_process():
     scores = d.steps[0]['criterion']
     assert scores['rate_random_walk'] < scores['gauss_markov']
     assert d.final_gap < 0.7 * d.baseline_gap
+
+
+def test_criterion_counts_an_alternative_searchs_parameters_and_estimated_values():
+    # A comb (vibration's alternative) has a fitted width and a spacing estimated from its
+    # lines: two parameters more than a tone.
+    h = bench_script.load('validate_diagnosis')
+    t = np.arange(8192) * h.DT
+    x = h.make_record([], 8192, seed=5) + 2e-3 * sum(
+        np.sin(2 * np.pi * (20.0 + 1.5 * k) * t) for k in range(-2, 3))
+    p = static_expect.closed_form_problem([x], h.DT, twins=4, seed=6)
+    space = {s.name: s for s in p.spaces}['vibration']
+    assert space.alternatives and space.alternatives[0].estimated == ('spacing_hz',)
+    base = p.expect(0, [])
+    tone = {'amplitude': 1e-3, 'freq_hz': 20.0}
+    score = {k: p.choose(Evaluation([('vibration', v)], 0.0, [base])) for k, v in (
+        ('tone', tone), ('comb', {**tone, 'spacing_hz': 1.5, 'width_hz': 3.0}))}
+    n = sum(np.size(v) for v in p.reals[0].values())
+    assert abs(score['comb'] - score['tone'] - 2 * np.log(n)) < 1e-9

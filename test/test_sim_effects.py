@@ -243,6 +243,21 @@ def test_vibration_line_amplitude_and_frequency():
     assert math.hypot(coef[1], coef[2]) == pytest.approx(amp, rel=0.01)
 
 
+def test_vibration_comb_lines_sit_on_the_lattice_under_the_lorentzian_envelope():
+    rate, amp, f, spacing, width = 200.0, 0.01, 30.3, 1.25, 2.5
+    cfg = _quiet(rate, 1e-4)
+    run = simulate_static(cfg, duration=100.0, seed=10, channels=['gyro_x'],
+                          effects=[f'vibration:freq_hz={f},amplitude={amp},spacing_hz='
+                                   f'{spacing},width_hz={width},axis=0'])
+    x = run.imu.channels['gyro_x']
+    for k in (-3, -1, 0, 2, 5):
+        coef = _fourier(run.imu.t, x, 2 * np.pi * (f + k * spacing), 1)
+        want = amp / math.sqrt(1.0 + (k * spacing / width) ** 2)
+        assert math.hypot(coef[1], coef[2]) == pytest.approx(want, rel=0.02), k
+    between = _fourier(run.imu.t, x, 2 * np.pi * (f + 0.5 * spacing), 1)
+    assert math.hypot(between[1], between[2]) < 0.01 * amp
+
+
 def test_scale_factor_nonlinearity_harmonics():
     k2, k3 = 0.02, 0.05
     c, big_w, _, _ = _swing_lines(f'scale_factor_nonlinearity:k2={k2},k3={k3}', 11)

@@ -50,11 +50,23 @@ class Criterion:
     def __init__(self, reals: Sequence[dict], spaces: Sequence[EffectSpace]):
         self.reals = list(reals)
         self.params = {s.name: list(s.params) for s in spaces}
+        # What only an alternative search has (a warm-up's onset, a comb's width), and the
+        # values a search estimates from the record instead (a comb's spacing).
+        self.extra, self.estimated = {}, {}
+        for space in spaces:
+            own = {p.name for p in space.params}
+            for sp in (space,) + tuple(space.alternatives):
+                self.extra.setdefault(space.name, {}).update(
+                    {p.name: p for p in sp.params if p.name not in own})
+                self.estimated.setdefault(space.name, set()).update(sp.estimated)
         self.log_n = float(np.log(max(element_count(self.reals), 2)))
 
     def free(self, name: str, params: dict) -> int:
         """Return the free parameters of one effect (an optional part that is off is not)."""
-        return sum(1 for p in self.params.get(name, ()) if not p.is_off(params.get(p.name, 1.0)))
+        own = sum(1 for p in self.params.get(name, ()) if not p.is_off(params.get(p.name, 1.0)))
+        extra = sum(1 for key, p in self.extra.get(name, {}).items()
+                    if key in params and not p.is_off(params[key]))
+        return own + extra + sum(1 for key in self.estimated.get(name, ()) if key in params)
 
     def __call__(self, ev: Evaluation) -> float:
         k = sum(self.free(name, params) for name, params in ev.effects)

@@ -70,6 +70,9 @@ class EffectSpace:
     # Other starts of the same search (another sign, another data-driven start): each is
     # fitted too and the best kept, as for a ``choice`` parameter.
     alternatives: tuple = ()
+    # Entries of ``fixed`` estimated from the record rather than known (a comb's spacing, from
+    # its lines): not searched, but free parameters to a criterion that counts them.
+    estimated: tuple = ()
 
 
 @dataclass

@@ -22,7 +22,7 @@ from typing import Callable, List, Optional, Sequence, Tuple
 
 from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.sim.effects.base import transient_terms
-from gyro_char.sim.effects.sensor import resonance_coefficients
+from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines
 import numpy as np
 
 # Effects whose static output has a closed form here.
@@ -253,9 +253,11 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
         elif name == 'quantization':
             spec.angle_var += p['step_rad'] ** 2 / (6.0 if p.get('dither', 0.0) else 12.0)
         elif name == 'vibration':
-            fa = fold(p['freq_hz'], 1.0 / dt_i)
-            power = 0.5 * p['amplitude'] ** 2 * float(spec.h2(np.array([fa]))[0])
-            spec.lines.append((float(fold(fa, 1.0 / dt)), power))
+            lines = vibration_lines(p['freq_hz'], p['amplitude'], p.get('spacing_hz', 0.0),
+                                    p.get('width_hz', 1.0))
+            fa = fold(np.array([f for f, _ in lines]), 1.0 / dt_i)
+            power = 0.5 * np.array([a for _, a in lines]) ** 2 * spec.h2(fa)
+            spec.lines.extend(zip(fold(fa, 1.0 / dt).tolist(), power.tolist()))
         elif name == 'temperature_drift':
             for c, lag in transient_terms(p['amplitude'], p['tau_s'], p.get('rise_s', 0.0)):
                 spec.warmups.append((c, lag, p.get('t0_s', 0.0)))

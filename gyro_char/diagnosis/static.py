@@ -136,6 +136,19 @@ def calibrate_n(base: StaticBaseline, x: np.ndarray, channel: str,
 # (white, flicker, random walks, Gauss-Markov); strong transients 16-20: a pulse searched on
 # wander fitted flicker's edge level as well as flicker did (both then left unnamed).
 PULSE_Z = 6.0
+# Likewise for a transient that starts mid-record, on the moving average's change over one
+# window (the mean after minus the mean before): noise and random walks of every shape seen
+# reached 2.0-5.0 on 90 records of 2 h, a draught through a 150 s lag 6.9-7.5. Searched on
+# a random walk, the onset fitted its largest wander as a near-step and took its name.
+STEP_Z = 6.0
+
+
+def standout(v: np.ndarray):
+    """Return the index of ``v``'s largest deviation from its median, in robust sds."""
+    dev = v - np.median(v)
+    j = int(np.argmax(np.abs(dev)))
+    spread = 1.4826 * float(np.median(np.abs(dev)))
+    return j, (abs(dev[j]) / spread if spread > 0.0 else np.inf), (1.0 if dev[j] >= 0 else -1.0)
 
 
 def static_spaces(base: StaticBaseline, x: np.ndarray,
@@ -165,17 +178,18 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     # detrending line tilts the early part the other way).
     cum = np.cumsum(y)
     k = int(np.argmax(np.abs(cum)))
-    onset, step_sign = k * dt, (1.0 if cum[k] >= 0.0 else -1.0)
     # A pulse (a bias sensing dT/dt as a temperature change passes): from the largest
-    # excursion of the record averaged over 1/64 of its length, with its sign; searched only
-    # where that excursion stands out of the average's own wander (PULSE_Z robust sds).
+    # excursion of the record averaged over 1/64 of its length, with its sign. Each is
+    # searched only where it stands out of the average's own wander (``standout``): the onset
+    # where the average's change over one window does (STEP_Z), the pulse where the average
+    # itself does (PULSE_Z).
     w = max(n // 64, 1)
-    smooth = (cum[w:] - cum[:-w]) / w if n > w else y
-    dev = smooth - np.median(smooth)
-    j = int(np.argmax(np.abs(dev)))
-    spread = 1.4826 * float(np.median(np.abs(dev)))
-    pulse = (((j + w / 2) * dt, 1.0 if dev[j] >= 0.0 else -1.0)
-             if abs(dev[j]) > PULSE_Z * spread else None)
+    smooth = (cum[w:] - cum[:-w]) / w if n > 2 * w else y
+    stepped = smooth[w:] - smooth[:-w] if smooth.size > w else smooth
+    onset = ((k * dt, 1.0 if cum[k] >= 0.0 else -1.0) if standout(stepped)[1] > STEP_Z
+             else None)
+    j, z, sign = standout(smooth)
+    pulse = ((j + w / 2) * dt, sign) if z > PULSE_Z else None
     k_long = sig_long / np.sqrt(tau_max)
     # Upper bounds from the record itself as well: on a long record a strong random walk or
     # flicker floor can sit far above 30x the white noise's Allan deviation at the longest tau.
@@ -207,14 +221,13 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'quantization': EffectSpace('quantization', [
             Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt)),
             Param('dither', 0, 1, integer=True, choice=True)]),
-        'temperature_drift': warm_up_space(sig_long, sig_sample, length, warm_sign,
-                                           onset, step_sign, pulse),
+        'temperature_drift': warm_up_space(sig_long, sig_sample, length, warm_sign, onset,
+                                           pulse),
         # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
-        # line between bins spreads its power differently from one on a bin).
-        'vibration': EffectSpace('vibration', [
-            Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample),
-            Param('freq_hz', *((max(f_tone - 2.0 * df, df), f_tone + 2.0 * df) if tones.size
-                               else (0.5 * f_tone, 1.5 * f_tone)), log=False)]),
+        # line between bins spreads its power differently from one on a bin). Where the PSD
+        # shows a comb of narrow lines, a comb about its strongest line is the alternative.
+        'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
+                                     obs.detected_comb(x, dt)),
         # A structural mode: band-limited noise around the same peak, of width f0 / q; its
         # centre is searched (a resonance's largest Welch bin need not be its centre).
         'resonance': EffectSpace('resonance', [
@@ -226,24 +239,25 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
 
 
 def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
-                  onset: float, step_sign: float, pulse=None) -> EffectSpace:
+                  onset=None, pulse=None) -> EffectSpace:
     """
     ``temperature_drift``'s search: a warm-up from power-on, one that started later, a pulse.
 
-    The power-on form (amplitude, lag); and, as alternative starts, the onset ``t0_s`` at the
-    record's change point with the sign there (a draught, a heater switching mid-record), and
-    a pulse (``rise_s``) rising before ``pulse`` = (time of the largest excursion, its sign).
-    Each alternative fits amplitude and lags around its start, then the onset; the best of
-    them is kept.
+    The power-on form (amplitude, lag); and, as alternative starts, ``onset`` = (the record's
+    change point, the sign there): a transient from ``t0_s`` (a draught, a heater switching
+    mid-record), and ``pulse`` = (time of the largest excursion, its sign): a pulse
+    (``rise_s``) rising before it. Each alternative fits amplitude and lags around its start,
+    then the onset; the best of them is kept.
     """
     lag = Param('tau_s', length / 200, length / 2)
     power_on = EffectSpace('temperature_drift', [
         Param('amplitude', amp_lo, amp_hi, sign=warm_sign), lag])
     others = []
-    t0 = Param('t0_s', 0.01 * length, 0.9 * length, log=False, off_at='lo', init=onset)
-    if t0.lo < onset < t0.hi:
+    t0 = Param('t0_s', 0.01 * length, 0.9 * length, log=False, off_at='lo',
+               init=onset[0] if onset else 0.5 * length)
+    if onset is not None and t0.lo < onset[0] < t0.hi:
         others.append(EffectSpace('temperature_drift', [
-            Param('amplitude', amp_lo, amp_hi, sign=step_sign), lag, t0]))
+            Param('amplitude', amp_lo, amp_hi, sign=onset[1]), lag, t0]))
     if pulse is not None:
         at, sign = pulse
         start = min(max(at - length / 50, t0.lo), t0.hi)
@@ -253,6 +267,30 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
             Param('rise_s', length / 4000, length / 20),
             replace(t0, init=start)]))
     return replace(power_on, alternatives=tuple(others))
+
+
+def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
+                    comb=None) -> EffectSpace:
+    """
+    ``vibration``'s search: the tone at the strongest narrow peak; a comb where one shows.
+
+    ``comb`` = (centre, spacing) from ``observables.detected_comb``: lines at centre + k
+    spacing under a Lorentzian envelope whose width is fitted (a tone is its narrow limit).
+    The spacing, a least-squares fit over the lines' peaks, is kept (``estimated``): the
+    observables hardly see a 0.2 % change of it, so a search would only trade it for noise.
+    """
+    amplitude = Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample)
+    freq = (Param('freq_hz', max(f_tone - 2.0 * df, df), f_tone + 2.0 * df, log=False)
+            if f_tone is not None else Param('freq_hz', 0.125 / dt, 0.375 / dt, log=False))
+    others = ()
+    if comb is not None:
+        centre, spacing = comb
+        others = (EffectSpace('vibration', [
+            amplitude, Param('freq_hz', max(centre - 0.5 * df, 0.5 * df), centre + 0.5 * df,
+                             log=False, init=centre),
+            Param('width_hz', 0.25 * spacing, 1.0 / dt)], fixed={'spacing_hz': spacing},
+            estimated=('spacing_hz',), passes=2),)
+    return EffectSpace('vibration', [amplitude, freq], alternatives=others)
 
 
 def checked_records(records: Sequence, dt: float, max_samples: Optional[int] = None):

@@ -169,6 +169,19 @@ def one_pole(x: np.ndarray, lag_s: float, dt: float, start: str = 'first') -> np
     return signal.lfilter(b, den, x, axis=-1, zi=zi)[0]
 
 
+def axis_param(default: float = -1.0) -> tuple:
+    """Return the PARAMS entry of the ``axis`` parameter that ``axis_rows`` reads."""
+    return (default, '-', '-1: all gyro axes, 0/1/2: x/y/z')
+
+
+def axis_rows(effect) -> list:
+    """Return the gyro rows an effect's ``axis`` parameter selects (-1: all three)."""
+    axis = int(effect.params.get('axis', -1))
+    if axis not in (-1, 0, 1, 2):
+        raise InputError(f'{effect.name}: axis must be -1 (all), 0, 1 or 2')
+    return [0, 1, 2] if axis == -1 else [axis]
+
+
 def transient_terms(amplitude: float, tau_s: float, rise_s: float = 0.0) -> list:
     """
     Return a bias transient as (coefficient, lag) terms c exp(-(t - t0) / lag), held before t0.

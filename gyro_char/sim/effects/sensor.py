@@ -1,7 +1,8 @@
 """
-Sensor effects: smoothing, thermal transient, extra noise processes, quantization, tones, modes.
+Sensor effects: smoothing, thermal transient, extra noise processes, quantization.
 
-Axis-selecting parameters: ``axis`` -1 means all three gyro axes, 0/1/2 one of x/y/z.
+Axis-selecting parameters: ``axis`` -1 means all three gyro axes, 0/1/2 one of x/y/z
+(``base.axis_rows``). Tones, combs and structural modes are in ``vibration``.
 Effects that map exactly onto an IEEE 952 term (B, K, Q) add it, in quadrature, to the truth of
 the channels they touch; ``internal_lowpass`` rescales truth N by its exact long-tau gain.
 """
@@ -10,22 +11,11 @@ from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
-from gyro_char.sim.effects.base import describe_without, Effect, register, transient_terms
+from gyro_char.sim.effects.base import (axis_param, axis_rows, describe_without, Effect, register,
+                                        transient_terms)
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
-
-
-def _axis_param(default: float = -1.0) -> tuple:
-    """Return the PARAMS entry of the ``axis`` parameter that ``_rows`` reads."""
-    return (default, '-', '-1: all gyro axes, 0/1/2: x/y/z')
-
-
-def _rows(effect) -> list:
-    axis = int(effect.params.get('axis', -1))
-    if axis not in (-1, 0, 1, 2):
-        raise InputError(f'{effect.name}: axis must be -1 (all), 0, 1 or 2')
-    return [0, 1, 2] if axis == -1 else [axis]
 
 
 def _add_truth_term(truth, rows, term, value):
@@ -116,10 +106,10 @@ class TemperatureDrift(Effect):
               'tau_s': (600.0, 's', 'thermal time constant'),
               't0_s': (0.0, 's', 'when the transient starts (0: at power-on)'),
               'rise_s': (0.0, 's', 'rise time of a pulse (0: a step, no pulse)'),
-              'axis': _axis_param()}
+              'axis': axis_param()}
 
     def check(self):
-        _rows(self)
+        axis_rows(self)
         if self.tau_s <= 0 or self.t0_s < 0 or self.rise_s < 0:
             raise InputError('temperature_drift: tau_s must be > 0, t0_s and rise_s >= 0')
 
@@ -131,7 +121,7 @@ class TemperatureDrift(Effect):
         shape = sum(c * np.exp(-since / lag)
                     for c, lag in transient_terms(self.amplitude, self.tau_s, self.rise_s))
         gyro = gyro.copy()
-        for r in _rows(self):
+        for r in axis_rows(self):
             gyro[r] += shape
         return gyro, accel
 
@@ -142,7 +132,7 @@ class _NoiseTerm(Effect):
     term = ''
 
     def check(self):
-        _rows(self)
+        axis_rows(self)
         if self.params[self.term] < 0:
             raise InputError(f'{self.name}: {self.term} must be >= 0')
 
@@ -154,12 +144,12 @@ class _NoiseTerm(Effect):
     def sensor(self, ctx, gyro, accel):
         gyro = gyro.copy()
         rng = self.rng(ctx)
-        for r in _rows(self):
+        for r in axis_rows(self):
             gyro[r] += self.series(gyro.shape[1], ctx, rng)
         return gyro, accel
 
     def update_truth(self, ctx, truth):
-        _add_truth_term(truth, _rows(self), self.term, self.params[self.term])
+        _add_truth_term(truth, axis_rows(self), self.term, self.params[self.term])
 
 
 @register
@@ -179,7 +169,7 @@ class BiasInstability(_NoiseTerm):
                'continuous limit, 1/f below the corner (floor 0.664 B at tau >> '
                '1 / corner_hz), 1/f^2 above it.')
     PARAMS = {'B': (10.0 * DEG / 3600.0, 'rad/s', 'IEEE bias-instability coefficient'),
-              'axis': _axis_param(),
+              'axis': axis_param(),
               'corner_hz': (0.0, 'Hz', 'upper corner: 1/f below, 1/f^2 above (0: none)')}
 
     def check(self):
@@ -203,7 +193,7 @@ class RateRandomWalk(_NoiseTerm):
     physics = ('Integrated white rate-acceleration noise: PSD K^2 / (2 pi f)^2, Allan '
                'variance K^2 tau / 3.')
     PARAMS = {'K': (1.0 * DEG / 3600.0, 'rad/s/sqrt(s)', 'IEEE rate-random-walk coefficient'),
-              'axis': _axis_param()}
+              'axis': axis_param()}
 
 
 @register
@@ -223,11 +213,11 @@ class GaussMarkov(Effect):
                'continuous limit; also stationary from the first sample.')
     PARAMS = {'sigma': (0.01 * DEG, 'rad/s', 'stationary standard deviation'),
               'tau_s': (10.0, 's', 'correlation time'),
-              'axis': _axis_param(),
+              'axis': axis_param(),
               'order': (1.0, '-', '1: first order, 2: two first-order stages in cascade')}
 
     def check(self):
-        _rows(self)
+        axis_rows(self)
         if self.sigma < 0 or self.tau_s <= 0:
             raise InputError('gauss_markov: sigma >= 0 and tau_s > 0')
         if self.order not in (1.0, 2.0):
@@ -238,7 +228,7 @@ class GaussMarkov(Effect):
         rng = self.rng(ctx)
         gyro = gyro.copy()
         n = gyro.shape[1]
-        for r in _rows(self):
+        for r in axis_rows(self):
             w = rng.standard_normal(n)
             if int(self.order) == 2:
                 gyro[r] += self.sigma * second_order_gm(a, w, rng)
@@ -285,11 +275,11 @@ class AngleQuantization(Effect):
                'white whatever the rate noise, of mean variance step^2 / 6, so Q = step / '
                'sqrt(6).')
     PARAMS = {'step_rad': (1.0e-5, 'rad', 'angle quantum'),
-              'axis': _axis_param(),
+              'axis': axis_param(),
               'dither': (0.0, '-', '1: one-step uniform dither before each read-out')}
 
     def check(self):
-        _rows(self)
+        axis_rows(self)
         if self.step_rad <= 0:
             raise InputError('quantization: step_rad must be > 0')
         if self.dither not in (0.0, 1.0):
@@ -298,7 +288,7 @@ class AngleQuantization(Effect):
     def output(self, ctx, gyro, accel):
         gyro = gyro.copy()
         rng = self.rng(ctx) if self.dither else None
-        for r in _rows(self):
+        for r in axis_rows(self):
             theta = np.cumsum(gyro[r]) * ctx.dt / self.step_rad
             if rng is not None:
                 theta += rng.uniform(0.0, 1.0, theta.size)
@@ -307,89 +297,4 @@ class AngleQuantization(Effect):
 
     def update_truth(self, ctx, truth):
         q = self.step_rad / np.sqrt(6.0 if self.dither else 12.0)
-        _add_truth_term(truth, _rows(self), 'Q', q)
-
-
-@register
-class Vibration(Effect):
-    """A sinusoidal tone in the gyro output (mount vibration or an internal oscillation)."""
-
-    name = 'vibration'
-    summary = 'sinusoidal tone on gyro axes (e.g. the ADIS16405 Z-gyro tone near 17-21 Hz)'
-    physics = ('rate += amplitude sin(2 pi freq_hz t + phase), phase uniform random: a PSD '
-               'line of power amplitude^2 / 2 at freq_hz (aliased if above Nyquist of the '
-               'internal rate); Allan deviation oscillating below ~1/freq_hz.')
-    PARAMS = {'freq_hz': (19.0, 'Hz', 'tone frequency'),
-              'amplitude': (0.05 * DEG, 'rad/s', 'tone amplitude'),
-              'axis': _axis_param(2.0)}
-
-    def check(self):
-        _rows(self)
-        if self.freq_hz <= 0:
-            raise InputError('vibration: freq_hz must be > 0')
-
-    def sensor(self, ctx, gyro, accel):
-        phase = self.rng(ctx).uniform(0.0, 2.0 * np.pi)
-        tone = self.amplitude * np.sin(2.0 * np.pi * self.freq_hz * ctx.t + phase)
-        gyro = gyro.copy()
-        for r in _rows(self):
-            gyro[r] += tone
-        return gyro, accel
-
-
-def resonance_coefficients(freq_hz: float, q: float, dt: float):
-    """
-    AR(2) coefficients of a resonance and its innovation variance for unit output variance.
-
-    x_k = a1 x_(k-1) + a2 x_(k-2) + e_k with poles r exp(+-i 2 pi f0 dt), r = exp(-pi f0 dt / Q):
-    white noise through a second-order resonator of centre f0 and -3 dB bandwidth f0 / Q.
-    Returns (a1, a2, var_e), var_e giving a stationary variance of 1.
-    """
-    theta = 2.0 * np.pi * freq_hz * dt
-    r = np.exp(-np.pi * freq_hz * dt / q)
-    a1, a2 = 2.0 * r * np.cos(theta), -r * r
-    gamma0 = (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2) ** 2 - a1 * a1))
-    return float(a1), float(a2), float(1.0 / gamma0)
-
-
-@register
-class Resonance(Effect):
-    """Band-limited rate noise around a frequency: a structural mode excited by broadband noise."""
-
-    name = 'resonance'
-    summary = 'band-limited noise around freq_hz with quality factor q (a structural mode)'
-    physics = ('A lightly damped mode (mount, package, the sense element itself) driven by '
-               'broadband disturbances: white noise through a second-order resonator, '
-               'x_k = a1 x_(k-1) + a2 x_(k-2) + e_k with poles r exp(+-i 2 pi f0 dt), '
-               'r = exp(-pi f0 dt / q), at the internal rate, scaled to standard deviation '
-               'sigma and stationary from the first sample. PSD: a peak of -3 dB width '
-               'f0 / q (a pure tone is the limit q -> infinity, a wide bump q ~ 1); its '
-               'phase wanders, so unlike ``vibration`` its line broadens with record length '
-               'no further than f0 / q.')
-    PARAMS = {'sigma': (0.05 * DEG, 'rad/s', 'stationary standard deviation'),
-              'freq_hz': (20.0, 'Hz', 'centre frequency f0'),
-              'q': (20.0, '-', 'quality factor: f0 / (-3 dB bandwidth)'),
-              'axis': _axis_param(2.0)}
-
-    def check(self):
-        _rows(self)
-        if self.sigma < 0 or self.freq_hz <= 0 or self.q < 0.5:
-            raise InputError('resonance: sigma >= 0, freq_hz > 0 and q >= 0.5')
-
-    def sensor(self, ctx, gyro, accel):
-        if self.freq_hz >= 0.5 / ctx.dt_internal:
-            raise InputError(f'resonance: freq_hz {self.freq_hz:g} is at or above the internal '
-                             f'Nyquist frequency {0.5 / ctx.dt_internal:g} Hz')
-        a1, a2, var_e = resonance_coefficients(self.freq_hz, self.q, ctx.dt_internal)
-        g0 = 1.0
-        g1 = a1 / (1.0 - a2)
-        chol = np.linalg.cholesky(np.array([[g0, g1], [g1, g0]]))
-        rng = self.rng(ctx)
-        gyro = gyro.copy()
-        for r in _rows(self):
-            y1, y2 = chol @ rng.standard_normal(2)       # x_(-1), x_(-2), stationary
-            e = np.sqrt(var_e) * rng.standard_normal(gyro.shape[1])
-            zi = signal.lfiltic([1.0], [1.0, -a1, -a2], y=[y1, y2])
-            x, _ = signal.lfilter([1.0], [1.0, -a1, -a2], e, zi=zi)
-            gyro[r] += self.sigma * x
-        return gyro, accel
+        _add_truth_term(truth, axis_rows(self), 'Q', q)

@@ -1,0 +1,138 @@
+"""
+Vibration effects: a tone or a comb of lines (deterministic), a structural mode (random).
+
+``vibration_lines`` defines a vibration's lines once, for the simulator and for the closed-form
+spectra of the diagnosis. Axis-selecting parameters as in ``sensor`` (``base.axis_rows``).
+"""
+from gyro_char.errors import InputError
+from gyro_char.sim.effects.base import axis_param, axis_rows, Effect, register
+from gyro_char.units import DEG
+import numpy as np
+from scipy import signal
+
+
+# Comb lines kept: down to this share of the centre line's power, at most this many a side.
+COMB_FLOOR = 1e-3
+COMB_SIDE = 200
+
+
+def vibration_lines(freq_hz: float, amplitude: float, spacing_hz: float = 0.0,
+                    width_hz: float = 0.0, f_max: float = np.inf) -> list:
+    """
+    Return a vibration's lines as (frequency, amplitude) pairs (simulator and closed form).
+
+    ``spacing_hz`` 0: the tone alone. Otherwise a comb: lines at freq_hz + k spacing_hz
+    (0 < f < ``f_max``) whose power falls off as a Lorentzian of half width ``width_hz`` about
+    the centre line: what a periodic, non-sinusoidal disturbance makes (a knock or kick every
+    1 / spacing_hz seconds, a gear mesh with shaft run-out sidebands, a frequency-modulated
+    drive), the envelope being the response that shapes each event.
+    """
+    if spacing_hz <= 0.0 or width_hz <= 0.0:
+        return [(freq_hz, amplitude)]
+    side = int(min(COMB_SIDE, np.ceil(width_hz / spacing_hz / np.sqrt(COMB_FLOOR))))
+    k = np.arange(-side, side + 1)
+    f = freq_hz + k * spacing_hz
+    a = amplitude / np.sqrt(1.0 + (k * spacing_hz / width_hz) ** 2)
+    keep = (f > 0.0) & (f < f_max)
+    return list(zip(f[keep].tolist(), a[keep].tolist()))
+
+
+@register
+class Vibration(Effect):
+    """A sinusoidal tone in the gyro output, or a comb of lines (a periodic disturbance)."""
+
+    name = 'vibration'
+    summary = ('sinusoidal tone on gyro axes (e.g. the ADIS16405 Z-gyro tone near 17-21 Hz), '
+               'or a comb of lines spacing_hz apart around it')
+    physics = ('rate += amplitude sin(2 pi freq_hz t + phase), phase uniform random: a PSD '
+               'line of power amplitude^2 / 2 at freq_hz (aliased if above Nyquist of the '
+               'internal rate); Allan deviation oscillating below ~1/freq_hz. With spacing_hz '
+               '> 0, a periodic non-sinusoidal disturbance: lines at freq_hz + k spacing_hz, '
+               'each of its own random phase, power amplitude^2 / 2 / (1 + (k spacing_hz / '
+               'width_hz)^2) (knocks, kicks, gear-mesh sidebands, a frequency-modulated drive).')
+    PARAMS = {'freq_hz': (19.0, 'Hz', "tone frequency (the comb's centre line)"),
+              'amplitude': (0.05 * DEG, 'rad/s', "tone amplitude (the centre line's)"),
+              'spacing_hz': (0.0, 'Hz', 'comb line spacing; 0 = one tone'),
+              'width_hz': (1.0, 'Hz', "half width of the comb's Lorentzian power envelope"),
+              'axis': axis_param(2.0)}
+
+    def check(self):
+        axis_rows(self)
+        if self.freq_hz <= 0:
+            raise InputError('vibration: freq_hz must be > 0')
+        if self.spacing_hz < 0 or self.width_hz <= 0:
+            raise InputError('vibration: spacing_hz >= 0 and width_hz > 0')
+
+    def lines(self, f_max: float = np.inf) -> list:
+        """Return this vibration's (frequency, amplitude) lines below ``f_max``."""
+        return vibration_lines(self.freq_hz, self.amplitude, self.spacing_hz, self.width_hz,
+                               f_max)
+
+    def sensor(self, ctx, gyro, accel):
+        lines = self.lines()
+        phases = self.rng(ctx).uniform(0.0, 2.0 * np.pi, len(lines))
+        tone = np.zeros(ctx.t.size)
+        for (f, a), phase in zip(lines, phases):
+            tone += a * np.sin(2.0 * np.pi * f * ctx.t + phase)
+        gyro = gyro.copy()
+        for r in axis_rows(self):
+            gyro[r] += tone
+        return gyro, accel
+
+
+def resonance_coefficients(freq_hz: float, q: float, dt: float):
+    """
+    AR(2) coefficients of a resonance and its innovation variance for unit output variance.
+
+    x_k = a1 x_(k-1) + a2 x_(k-2) + e_k with poles r exp(+-i 2 pi f0 dt), r = exp(-pi f0 dt / Q):
+    white noise through a second-order resonator of centre f0 and -3 dB bandwidth f0 / Q.
+    Returns (a1, a2, var_e), var_e giving a stationary variance of 1.
+    """
+    theta = 2.0 * np.pi * freq_hz * dt
+    r = np.exp(-np.pi * freq_hz * dt / q)
+    a1, a2 = 2.0 * r * np.cos(theta), -r * r
+    gamma0 = (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2) ** 2 - a1 * a1))
+    return float(a1), float(a2), float(1.0 / gamma0)
+
+
+@register
+class Resonance(Effect):
+    """Band-limited rate noise around a frequency: a structural mode excited by broadband noise."""
+
+    name = 'resonance'
+    summary = 'band-limited noise around freq_hz with quality factor q (a structural mode)'
+    physics = ('A lightly damped mode (mount, package, the sense element itself) driven by '
+               'broadband disturbances: white noise through a second-order resonator, '
+               'x_k = a1 x_(k-1) + a2 x_(k-2) + e_k with poles r exp(+-i 2 pi f0 dt), '
+               'r = exp(-pi f0 dt / q), at the internal rate, scaled to standard deviation '
+               'sigma and stationary from the first sample. PSD: a peak of -3 dB width '
+               'f0 / q (a pure tone is the limit q -> infinity, a wide bump q ~ 1); its '
+               'phase wanders, so unlike ``vibration`` its line broadens with record length '
+               'no further than f0 / q.')
+    PARAMS = {'sigma': (0.05 * DEG, 'rad/s', 'stationary standard deviation'),
+              'freq_hz': (20.0, 'Hz', 'centre frequency f0'),
+              'q': (20.0, '-', 'quality factor: f0 / (-3 dB bandwidth)'),
+              'axis': axis_param(2.0)}
+
+    def check(self):
+        axis_rows(self)
+        if self.sigma < 0 or self.freq_hz <= 0 or self.q < 0.5:
+            raise InputError('resonance: sigma >= 0, freq_hz > 0 and q >= 0.5')
+
+    def sensor(self, ctx, gyro, accel):
+        if self.freq_hz >= 0.5 / ctx.dt_internal:
+            raise InputError(f'resonance: freq_hz {self.freq_hz:g} is at or above the internal '
+                             f'Nyquist frequency {0.5 / ctx.dt_internal:g} Hz')
+        a1, a2, var_e = resonance_coefficients(self.freq_hz, self.q, ctx.dt_internal)
+        g0 = 1.0
+        g1 = a1 / (1.0 - a2)
+        chol = np.linalg.cholesky(np.array([[g0, g1], [g1, g0]]))
+        rng = self.rng(ctx)
+        gyro = gyro.copy()
+        for r in axis_rows(self):
+            y1, y2 = chol @ rng.standard_normal(2)       # x_(-1), x_(-2), stationary
+            e = np.sqrt(var_e) * rng.standard_normal(gyro.shape[1])
+            zi = signal.lfiltic([1.0], [1.0, -a1, -a2], y=[y1, y2])
+            x, _ = signal.lfilter([1.0], [1.0, -a1, -a2], e, zi=zi)
+            gyro[r] += self.sigma * x
+        return gyro, accel
