@@ -25,7 +25,8 @@ the kinds of departure differ from shape to shape:
   1 / sqrt(i w) gives PSD ~ b^2 / (pi f) from 2e-4 to ~20 Hz, flat below, 1 / f^2 above;
 - rate_random_walk: a walk with auto-zero: the bias random-walks but the sensor's automatic
   bias update re-zeroes it every 900 s (a fixed cadence, random phase): Brownian pieces that
-  each start from zero;
+  each start from zero; the re-zeroing steps double the walk's Allan variance, 2 K^2 tau / 3
+  up to ~P / 10, which bends over beyond;
 - gauss_markov: a demodulation product: the bias is a wandering quadrature error times a
   wandering demodulator phase error, two independent first-order Gauss-Markov processes with
   correlation times 1.5 tc and 3 tc: a symmetric, leptokurtic (excess kurtosis 6) marginal,

@@ -70,7 +70,7 @@ def allpass(x: np.ndarray, d_samples: float) -> np.ndarray:
 
 
 def settling(t: np.ndarray) -> np.ndarray:
-    """The g-coefficient's factor 1 + 2 e^(-t / 200 s) after power-on."""
+    """Return the g-coefficient's factor 1 + 2 e^(-t / 200 s) after power-on."""
     return 1 + SETTLE_EXCESS * np.exp(-np.asarray(t) / SETTLE_TAU)
 
 
@@ -125,6 +125,7 @@ def shapes(rate_hz: float) -> dict:
         'encoder_cyclic_error': (interleaved, [{'eps': 3e-3}, {'eps': 1e-2},
                                                {'eps': 4.66e-4}]),
     }
+
 
 def noise_lines(err, amp_rate: float, s_n: float) -> float:
     """Norm of lines k >= 2 of the noise-averaged memoryless rate error at amp_rate cos(th)."""
