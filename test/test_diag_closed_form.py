@@ -29,6 +29,9 @@ CASES = {
     'vibration': [('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}), LOWPASS],
     'vibration_comb': [('vibration', {'amplitude': 2e-3, 'freq_hz': 20.3, 'spacing_hz': 1.3,
                                       'width_hz': 4.0}), LOWPASS],
+    'vibration_tones': [('vibration', {'amplitude': 2e-3, 'freq_hz': 21.8, 'freq2_hz': 13.1,
+                                       'amplitude2': 3e-3, 'freq3_hz': 33.3,
+                                       'amplitude3': 1e-3}), LOWPASS],
     'temperature_drift': [('temperature_drift', {'amplitude': -3e-3, 'tau_s': 20.0})],
     'temperature_step': [('temperature_drift', {'amplitude': -3e-3, 'tau_s': 15.0,
                                                 't0_s': 70.0})],
@@ -291,4 +294,25 @@ def test_a_comb_is_named_vibration_not_resonance_and_closes_the_gap():
     assert d.selected_effects[:1] == ['vibration']
     fitted = dict(d.model)['vibration']
     assert fitted['spacing_hz'] == pytest.approx(1.25, rel=1e-3)
+    assert d.final_gap < min(0.2 * d.baseline_gap, 2.0 * d.null_gap['q95'])
+
+
+def test_three_unrelated_tones_are_one_vibration_each_amplitude_fitted():
+    # Three machines' tones (not on one lattice): one vibration with three lines, not a
+    # resonance over the strongest.
+    n = 2 ** 17
+    truth = {'amplitude': 2e-3, 'freq_hz': 24.5, 'freq2_hz': 17.3, 'amplitude2': 1.2e-3,
+             'freq3_hz': 9.1, 'amplitude3': 6e-4}
+    x = static.simulate_twin(BASE, n, [('vibration', truth)], 8)
+    lines = obs.narrow_lines(x, DT)
+    assert lines.size == 3 and obs.comb_of(lines, 1.0 / (obs.welch_segment(n) * DT)) is None
+    problem = static_expect.closed_form_problem([x], DT, twins=6, seed=3)
+    d = run(problem, repeats=6, seed=3)
+    assert d.selected_effects[:1] == ['vibration']
+    fitted = dict(d.model)['vibration']
+    keys = (('freq_hz', 'amplitude'), ('freq2_hz', 'amplitude2'), ('freq3_hz', 'amplitude3'))
+    got = sorted((fitted[f], fitted[a]) for f, a in keys)
+    want = sorted((truth[f], truth[a]) for f, a in keys)
+    for (fg, ag), (fw, aw) in zip(got, want):
+        assert fg == pytest.approx(fw, abs=0.01) and ag == pytest.approx(aw, rel=0.15)
     assert d.final_gap < min(0.2 * d.baseline_gap, 2.0 * d.null_gap['q95'])

@@ -258,6 +258,17 @@ def test_vibration_comb_lines_sit_on_the_lattice_under_the_lorentzian_envelope()
     assert math.hypot(between[1], between[2]) < 0.01 * amp
 
 
+def test_vibration_second_and_third_tones_have_their_own_amplitudes():
+    cfg = _quiet(200.0, 1e-4)
+    run = simulate_static(cfg, duration=100.0, seed=10, channels=['gyro_x'],
+                          effects=['vibration:freq_hz=30,amplitude=0.01,freq2_hz=17.5,'
+                                   'amplitude2=0.004,freq3_hz=41,amplitude3=0,axis=0'])
+    x = run.imu.channels['gyro_x']
+    for f, want in ((30.0, 0.01), (17.5, 0.004), (41.0, 0.0)):
+        coef = _fourier(run.imu.t, x, 2 * np.pi * f, 1)
+        assert math.hypot(coef[1], coef[2]) == pytest.approx(want, abs=2e-4), f
+
+
 def test_scale_factor_nonlinearity_harmonics():
     k2, k3 = 0.02, 0.05
     c, big_w, _, _ = _swing_lines(f'scale_factor_nonlinearity:k2={k2},k3={k3}', 11)

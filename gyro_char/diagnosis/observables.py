@@ -174,21 +174,20 @@ COMB_MAX_LINES = 64
 COMB_Z = 6.0            # a line stands this many robust sds of the bins' own scatter out
 
 
-def detected_comb(x: np.ndarray, dt: float, *, z: float = COMB_Z):
+def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z) -> np.ndarray:
     """
-    Return (centre, spacing) in Hz of a comb of narrow lines in the record's PSD, or None.
+    Return the frequencies (Hz) of the record's narrow lines, strongest first.
 
-    A line is a local maximum that stands ``z`` robust sds of the bins' own log scatter above
-    the running median and above the PSD three bins to either side (beyond a Hann line's main
-    lobe: a smooth band is not a line). Averaged Welch bins scatter by a few per cent, so many
-    weak lines (kicks spread over a hundred harmonics) count, not only prominent ones.
-    The centre is the strongest line; the spacing is the largest one that puts at least
-    ``COMB_MIN_LINES`` lines (centre included) on the lattice centre + k spacing within a bin,
-    refined by least squares over those lines' interpolated peak frequencies.
+    A line is a local maximum of the Welch PSD that stands ``z`` robust sds of the bins' own
+    log scatter above the running median and above the PSD three bins to either side (beyond
+    a Hann line's main lobe: a smooth band is not a line). Averaged Welch bins scatter by a
+    few per cent, so many weak lines (kicks spread over a hundred harmonics) count, not only
+    prominent ones. Frequencies are interpolated within the bin (a parabola through the log
+    PSD at the peak and its neighbours); at most ``COMB_MAX_LINES``.
     """
     f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
     if p.size < 16:
-        return None
+        return np.zeros(0)
     prom = tone_prominence(f, p)
     q = np.pad(p, 3, mode='edge')
     narrow = np.log10(np.maximum(p, 1e-300) / np.maximum(np.maximum(q[:-6], q[6:]), 1e-300))
@@ -198,23 +197,38 @@ def detected_comb(x: np.ndarray, dt: float, *, z: float = COMB_Z):
     peak[1:-1] &= (p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:])
     idx = np.flatnonzero(peak)
     idx = idx[np.argsort(prom[idx])[::-1][:COMB_MAX_LINES]]
-    if idx.size < COMB_MIN_LINES:
-        return None
-    # Sub-bin peak positions (parabola through the log PSD at the peak and its neighbours).
     lp = np.log(np.maximum(p, 1e-300))
     i = np.clip(idx, 1, p.size - 2)
     den = lp[i - 1] - 2.0 * lp[i] + lp[i + 1]
     shift = np.where(den < 0, 0.5 * (lp[i - 1] - lp[i + 1]) / np.where(den < 0, den, -1.0), 0.0)
-    fl = f[i] + np.clip(shift, -0.5, 0.5) * f[1]
-    centre, best = fl[0], None
-    for d in sorted({abs(a - b) for a in fl for b in fl if abs(a - b) > 3 * f[1]}, reverse=True):
-        k = np.round((fl - centre) / d)
-        on = np.abs(fl - centre - k * d) <= f[1]
+    return f[i] + np.clip(shift, -0.5, 0.5) * f[1]
+
+
+def comb_of(lines: np.ndarray, df: float):
+    """
+    Return (centre, spacing) in Hz of a comb among ``lines`` (strongest first), or None.
+
+    The centre is the strongest line; the spacing is the largest one that puts at least
+    ``COMB_MIN_LINES`` lines (centre included) on the lattice centre + k spacing within a bin
+    ``df``, refined by least squares over those lines.
+    """
+    if lines.size < COMB_MIN_LINES:
+        return None
+    centre, best = lines[0], None
+    for d in sorted({abs(a - b) for a in lines for b in lines if abs(a - b) > 3 * df},
+                    reverse=True):
+        k = np.round((lines - centre) / d)
+        on = np.abs(lines - centre - k * d) <= df
         if on.sum() >= COMB_MIN_LINES and (best is None or on.sum() > best[0]):
-            best = (int(on.sum()), d, k[on], fl[on])
+            best = (int(on.sum()), d, k[on], lines[on])
     if best is None:
         return None
     _, d, k, fk = best
     a = np.vstack([np.ones_like(k), k]).T
     c0, d = np.linalg.lstsq(a, fk, rcond=None)[0]
     return float(c0), float(d)
+
+
+def detected_comb(x: np.ndarray, dt: float, *, z: float = COMB_Z):
+    """Return (centre, spacing) in Hz of a comb of the record's narrow lines, or None."""
+    return comb_of(narrow_lines(x, dt, z=z), 1.0 / (welch_segment(np.size(x)) * dt))

@@ -253,8 +253,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
         elif name == 'quantization':
             spec.angle_var += p['step_rad'] ** 2 / (6.0 if p.get('dither', 0.0) else 12.0)
         elif name == 'vibration':
-            lines = vibration_lines(p['freq_hz'], p['amplitude'], p.get('spacing_hz', 0.0),
-                                    p.get('width_hz', 1.0))
+            lines = vibration_lines(p)
             fa = fold(np.array([f for f, _ in lines]), 1.0 / dt_i)
             power = 0.5 * np.array([a for _, a in lines]) ** 2 * spec.h2(fa)
             spec.lines.extend(zip(fold(fa, 1.0 / dt).tolist(), power.tolist()))

@@ -227,7 +227,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         # line between bins spreads its power differently from one on a bin). Where the PSD
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
-                                     obs.detected_comb(x, dt)),
+                                     obs.narrow_lines(x, dt)),
         # A structural mode: band-limited noise around the same peak, of width f0 / q; its
         # centre is searched (a resonance's largest Welch bin need not be its centre).
         'resonance': EffectSpace('resonance', [
@@ -270,27 +270,41 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
 
 
 def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
-                    comb=None) -> EffectSpace:
+                    lines: Sequence[float] = ()) -> EffectSpace:
     """
-    ``vibration``'s search: the tone at the strongest narrow peak; a comb where one shows.
+    ``vibration``'s search: the tone at the strongest narrow peak; combs and tones if shown.
 
-    ``comb`` = (centre, spacing) from ``observables.detected_comb``: lines at centre + k
-    spacing under a Lorentzian envelope whose width is fitted (a tone is its narrow limit).
-    The spacing, a least-squares fit over the lines' peaks, is kept (``estimated``): the
-    observables hardly see a 0.2 % change of it, so a search would only trade it for noise.
+    ``lines``: the record's narrow lines, strongest first (``observables.narrow_lines``).
+    Where three or more sit on one lattice (``observables.comb_of``), a comb about the
+    strongest is an alternative start: lines at centre + k spacing under a Lorentzian
+    envelope whose width is fitted (a tone is its narrow limit). Where two or more lines
+    show, the three strongest as unrelated tones, each amplitude fitted (0 = absent), are
+    another. Line frequencies and the spacing, measured on the lines' peaks, are kept
+    (``estimated``): the observables hardly see a change within a bin, so a search would only
+    trade them for noise.
     """
     amplitude = Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample)
     freq = (Param('freq_hz', max(f_tone - 2.0 * df, df), f_tone + 2.0 * df, log=False)
             if f_tone is not None else Param('freq_hz', 0.125 / dt, 0.375 / dt, log=False))
-    others = ()
+    lines = np.asarray(lines, dtype=float)
+    others = []
+    comb = obs.comb_of(lines, df)
     if comb is not None:
         centre, spacing = comb
-        others = (EffectSpace('vibration', [
+        others.append(EffectSpace('vibration', [
             amplitude, Param('freq_hz', max(centre - 0.5 * df, 0.5 * df), centre + 0.5 * df,
                              log=False, init=centre),
             Param('width_hz', 0.25 * spacing, 1.0 / dt)], fixed={'spacing_hz': spacing},
-            estimated=('spacing_hz',), passes=2),)
-    return EffectSpace('vibration', [amplitude, freq], alternatives=others)
+            estimated=('spacing_hz',), passes=2))
+    if lines.size >= 2:
+        tones = lines[:3]
+        names = [('freq_hz', 'amplitude'), ('freq2_hz', 'amplitude2'), ('freq3_hz', 'amplitude3')]
+        others.append(EffectSpace('vibration', [amplitude] + [
+            Param(a, 0.01 * sig_sample, 2.0 * sig_sample, off_at='lo')
+            for _, a in names[1:tones.size]],
+            fixed={f: float(v) for (f, _), v in zip(names, tones)},
+            estimated=tuple(f for f, _ in names[:tones.size])))
+    return EffectSpace('vibration', [amplitude, freq], alternatives=tuple(others))
 
 
 def checked_records(records: Sequence, dt: float, max_samples: Optional[int] = None):

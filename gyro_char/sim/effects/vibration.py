@@ -16,25 +16,34 @@ COMB_FLOOR = 1e-3
 COMB_SIDE = 200
 
 
-def vibration_lines(freq_hz: float, amplitude: float, spacing_hz: float = 0.0,
-                    width_hz: float = 0.0, f_max: float = np.inf) -> list:
+def vibration_lines(params: dict, f_max: float = np.inf) -> list:
     """
     Return a vibration's lines as (frequency, amplitude) pairs (simulator and closed form).
 
-    ``spacing_hz`` 0: the tone alone. Otherwise a comb: lines at freq_hz + k spacing_hz
-    (0 < f < ``f_max``) whose power falls off as a Lorentzian of half width ``width_hz`` about
-    the centre line: what a periodic, non-sinusoidal disturbance makes (a knock or kick every
-    1 / spacing_hz seconds, a gear mesh with shaft run-out sidebands, a frequency-modulated
-    drive), the envelope being the response that shapes each event.
+    ``params`` as ``Vibration.PARAMS``. ``spacing_hz`` 0: the tone at freq_hz. Otherwise a
+    comb: lines at freq_hz + k spacing_hz (0 < f < ``f_max``) whose power falls off as a
+    Lorentzian of half width ``width_hz`` about the centre line: what a periodic,
+    non-sinusoidal disturbance makes (a knock or kick every 1 / spacing_hz seconds, a gear mesh
+    with shaft run-out sidebands, a frequency-modulated drive), the envelope being the response
+    that shapes each event. Plus the unrelated tones ``freq2_hz`` and ``freq3_hz`` (a second
+    and third machine), where their amplitudes are not 0.
     """
-    if spacing_hz <= 0.0 or width_hz <= 0.0:
-        return [(freq_hz, amplitude)]
-    side = int(min(COMB_SIDE, np.ceil(width_hz / spacing_hz / np.sqrt(COMB_FLOOR))))
-    k = np.arange(-side, side + 1)
-    f = freq_hz + k * spacing_hz
-    a = amplitude / np.sqrt(1.0 + (k * spacing_hz / width_hz) ** 2)
-    keep = (f > 0.0) & (f < f_max)
-    return list(zip(f[keep].tolist(), a[keep].tolist()))
+    freq, amplitude = params['freq_hz'], params['amplitude']
+    spacing, width = params.get('spacing_hz', 0.0), params.get('width_hz', 1.0)
+    if spacing <= 0.0 or width <= 0.0:
+        lines = [(freq, amplitude)]
+    else:
+        side = int(min(COMB_SIDE, np.ceil(width / spacing / np.sqrt(COMB_FLOOR))))
+        k = np.arange(-side, side + 1)
+        f = freq + k * spacing
+        a = amplitude / np.sqrt(1.0 + (k * spacing / width) ** 2)
+        keep = (f > 0.0) & (f < f_max)
+        lines = list(zip(f[keep].tolist(), a[keep].tolist()))
+    for j in (2, 3):
+        f, a = params.get(f'freq{j}_hz', 0.0), params.get(f'amplitude{j}', 0.0)
+        if f > 0.0 and a != 0.0 and f < f_max:
+            lines.append((f, a))
+    return lines
 
 
 @register
@@ -49,24 +58,28 @@ class Vibration(Effect):
                'internal rate); Allan deviation oscillating below ~1/freq_hz. With spacing_hz '
                '> 0, a periodic non-sinusoidal disturbance: lines at freq_hz + k spacing_hz, '
                'each of its own random phase, power amplitude^2 / 2 / (1 + (k spacing_hz / '
-               'width_hz)^2) (knocks, kicks, gear-mesh sidebands, a frequency-modulated drive).')
+               'width_hz)^2) (knocks, kicks, gear-mesh sidebands, a frequency-modulated drive). '
+               'freq2_hz / freq3_hz: further tones of their own amplitudes (other machines).')
     PARAMS = {'freq_hz': (19.0, 'Hz', "tone frequency (the comb's centre line)"),
               'amplitude': (0.05 * DEG, 'rad/s', "tone amplitude (the centre line's)"),
               'spacing_hz': (0.0, 'Hz', 'comb line spacing; 0 = one tone'),
               'width_hz': (1.0, 'Hz', "half width of the comb's Lorentzian power envelope"),
+              'freq2_hz': (0.0, 'Hz', 'a second, unrelated tone (0 = none)'),
+              'amplitude2': (0.0, 'rad/s', "the second tone's amplitude"),
+              'freq3_hz': (0.0, 'Hz', 'a third, unrelated tone (0 = none)'),
+              'amplitude3': (0.0, 'rad/s', "the third tone's amplitude"),
               'axis': axis_param(2.0)}
 
     def check(self):
         axis_rows(self)
         if self.freq_hz <= 0:
             raise InputError('vibration: freq_hz must be > 0')
-        if self.spacing_hz < 0 or self.width_hz <= 0:
-            raise InputError('vibration: spacing_hz >= 0 and width_hz > 0')
+        if self.spacing_hz < 0 or self.width_hz <= 0 or self.freq2_hz < 0 or self.freq3_hz < 0:
+            raise InputError('vibration: spacing_hz, freq2_hz, freq3_hz >= 0 and width_hz > 0')
 
     def lines(self, f_max: float = np.inf) -> list:
         """Return this vibration's (frequency, amplitude) lines below ``f_max``."""
-        return vibration_lines(self.freq_hz, self.amplitude, self.spacing_hz, self.width_hz,
-                               f_max)
+        return vibration_lines(self.params, f_max)
 
     def sensor(self, ctx, gyro, accel):
         lines = self.lines()
