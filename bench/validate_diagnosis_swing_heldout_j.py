@@ -12,8 +12,8 @@ differ from shape to shape:
   as old as the time since that conversion, which sweeps through [0, Ti) at the beat of the
   two clocks: a sawtooth-varying delay of mean Ti / 2 (motion from the stand at the
   conversion instant; when Ti exceeds the read interval a conversion's noise is read again);
-- g_sensitivity: an anisoelastic square law on top of the linear term: g_y f_y (1 + 2 f_y /
-  g), f_y = g sin(phi) (the g^2 coefficient twice the g coefficient, per g): a smooth bias,
+- g_sensitivity: an anisoelastic square law on top of the linear term: g_y f_y (1 + f_y / g),
+  f_y = g sin(phi) (the g^2 coefficient equal to the g coefficient, per g): a smooth bias,
   larger on one side of the swing than on the other, a 2f line beside the fundamental;
 - scale_factor_nonlinearity: counter dead time: a pulse-counting read-out (pulse rate
   proportional to |w|) loses the pulses that fall in its dead time, so the output is
@@ -21,8 +21,8 @@ differ from shape to shape:
   compressive, and not analytic at zero (w - w |w| / W): all odd harmonics;
 - scale_factor_asymmetry: a wandering asymmetry: the catalogue's a |w| (output value), its
   coefficient following the temperature difference between the torquer driver's two halves,
-  a (1 + 0.5 u(t)), u a unit first-order Gauss-Markov process of 60 s: never off, never
-  constant;
+  a (1 + 0.5 u(t)), u a unit first-order Gauss-Markov process of 60 s: a random wander
+  about a, never constant;
 - timestamp_jitter: interrupt collisions: the gyro's interrupt service (h long, once per
   gyro period P) delays the encoder's interrupt whenever that falls inside it; the two
   clocks beat at 0.37 Hz, so the encoder stamps are late by max(0, h - psi P) (psi the
@@ -47,8 +47,8 @@ Levels (``detectability``; 15 min, 1 kHz gyro and encoder, adis16405 preset: A =
   white floor and the preset's stamp jitter (as sets D-I).
 Edges are at z ~ 4 at the 5 s period; weak and strong are several to tens of times further in
 z. Physical scale: conversion periods of 0.335 ms (edge, 3 kHz), 2.13 ms and 5.71 ms (mean
-ages 0.17, 1.07 and 2.86 ms); g_y of 2.9e-5, 2e-4 and 5e-4 rad/s/(m/s^2) (0.016-0.28
-deg/s/g, the same per g^2 doubled); dead-time scales W of 315, 20 and 6 rad/s (compression
+ages 0.17, 1.07 and 2.86 ms); g_y of 3e-5, 2e-4 and 5e-4 rad/s/(m/s^2) (0.016-0.28
+deg/s/g, the same per g^2); dead-time scales W of 315, 20 and 6 rad/s (compression
 0.14 %, 2.1 % and 6.8 % at the 25 deg/s peak); asymmetries a of 5.5e-4 (edge), 0.01 and
 0.04; service times h of 13, 150 and 400 us; scale gaps of 1.3, 8 and 30 arcsec (0.3-7 um
 at a 50 mm radius).
@@ -59,7 +59,7 @@ import numpy as np
 from scipy import signal
 
 G0 = 9.80665
-SQUARE = 2.0                                # g^2 coefficient / g coefficient, per g
+SQUARE = 1.0                                # g^2 coefficient / g coefficient, per g
 ASYM_SWING, ASYM_TC = 0.5, 60.0             # relative sd and correlation time of a(t)
 BEAT_HZ = 0.37                              # beat of the gyro and encoder clocks
 JOINT, HEAD = np.deg2rad(7.0), np.deg2rad(0.05)
@@ -134,7 +134,7 @@ def shapes(rate_hz: float) -> dict:
     arcsec = np.pi / 180 / 3600
     return {
         'time_delay': (aged, [{'period': 2.13e-3}, {'period': 5.71e-3}, {'period': 3.35e-4}]),
-        'g_sensitivity': (anisoelastic, [{'gy': 2e-4}, {'gy': 5e-4}, {'gy': 2.91e-5}]),
+        'g_sensitivity': (anisoelastic, [{'gy': 2e-4}, {'gy': 5e-4}, {'gy': 3.03e-5}]),
         'scale_factor_nonlinearity': (counter, [{'scale': 20.0}, {'scale': 6.0},
                                                 {'scale': 315.0}]),
         'scale_factor_asymmetry': (wander, [{'a': 0.01}, {'a': 0.04}, {'a': 5.45e-4}]),
