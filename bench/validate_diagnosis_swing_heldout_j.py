@@ -72,7 +72,7 @@ def conversion_instants(t: np.ndarray, period: float, phase: float) -> np.ndarra
 
 
 def async_read(t, gyro, rate_at, period: float, phase: float) -> np.ndarray:
-    """Reads of the latest conversion: its motion, and its noise (repeated if read again)."""
+    """Return reads of the latest conversion: its motion and its noise (repeated if re-read)."""
     j = conversion_instants(t, period, phase)
     noise = gyro - rate_at(t)
     _, first, inverse = np.unique(j, return_index=True, return_inverse=True)
