@@ -210,7 +210,7 @@ def main(argv=None) -> int:
                     help='magnitude levels (0 weak, 1 strong, 2 edge of detectability)')
     ap.add_argument('--method', choices=('closed-form', 'twins'), default='closed-form')
     ap.add_argument('--held-out', nargs='?', const='a',
-                    choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i'),
+                    choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j'),
                     default=None,
                     help='a held-out shape set, no pairs: a = validate_diagnosis_heldout.py '
                          '(used once in session 3), b = validate_diagnosis_heldout_b.py, '
@@ -220,7 +220,8 @@ def main(argv=None) -> int:
                          'f = validate_diagnosis_heldout_f.py, '
                          'g = validate_diagnosis_heldout_g.py, '
                          'h = validate_diagnosis_heldout_h.py, '
-                         'i = validate_diagnosis_heldout_i.py')
+                         'i = validate_diagnosis_heldout_i.py, '
+                         'j = validate_diagnosis_heldout_j.py')
     ap.add_argument('--only', nargs='+', default=None, metavar='NAME',
                     help='only these shapes (and no pairs, no clean records)')
     ap.add_argument('--repeats', type=int, default=6)
@@ -241,7 +242,7 @@ def main(argv=None) -> int:
         module = 'validate_diagnosis_heldout' + {'a': '', 'b': '_b', 'c': '_c',
                                                  'd': '_d', 'e': '_e', 'f': '_f',
                                                  'g': '_g', 'h': '_h',
-                                                 'i': '_i'}[args.held_out]
+                                                 'i': '_i', 'j': '_j'}[args.held_out]
         shapes = importlib.import_module(module).shapes(DT, SIG, N_ARW)
     todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out)
     if args.only:
