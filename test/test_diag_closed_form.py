@@ -316,3 +316,15 @@ def test_three_unrelated_tones_are_one_vibration_each_amplitude_fitted():
     for (fg, ag), (fw, aw) in zip(got, want):
         assert fg == pytest.approx(fw, abs=0.01) and ag == pytest.approx(aw, rel=0.15)
     assert d.final_gap < min(0.2 * d.baseline_gap, 2.0 * d.null_gap['q95'])
+
+
+def test_line_amplitudes_are_read_from_the_psd_excess_within_a_few_per_cent():
+    n = 2 ** 17
+    rng = np.random.default_rng(12)
+    t = np.arange(n) * DT
+    x = (BASE.N / np.sqrt(DT) * rng.standard_normal(n) + 2e-3 * np.sin(2 * np.pi * 27.3 * t)
+         + 7e-4 * np.sin(2 * np.pi * 27.9 * t + 1.0))
+    lines = obs.narrow_lines(x, DT)
+    assert lines.size == 2
+    got = dict(zip(np.round(lines, 1), obs.line_amplitudes(x, DT, lines)))
+    assert got[27.3] == pytest.approx(2e-3, rel=0.05) and got[27.9] == pytest.approx(7e-4, rel=0.1)

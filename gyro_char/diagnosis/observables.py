@@ -204,6 +204,25 @@ def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z) -> np.ndarray:
     return f[i] + np.clip(shift, -0.5, 0.5) * f[1]
 
 
+def line_amplitudes(x: np.ndarray, dt: float, lines: np.ndarray) -> np.ndarray:
+    """
+    Return the amplitude (rad/s) of each of ``lines`` (Hz) from the record's Welch PSD.
+
+    A line's power is its PSD's excess over the running median, summed over its Hann main lobe
+    (three bins either side) times the bin width; the amplitude is sqrt(2 power). A starting
+    point for a search of several tones at once, whose gap valley (their total power fixed)
+    a one-at-a-time search from one tone would crawl along.
+    """
+    f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
+    base = ndimage.median_filter(p, size=max(31, (p.size // 10) | 1), mode='nearest')
+    excess = np.maximum(p - base, 0.0)
+    out = []
+    for f0 in np.atleast_1d(lines):
+        k = int(round(f0 / f[1]))
+        out.append(np.sqrt(2.0 * excess[max(k - 3, 0):k + 4].sum() * f[1]))
+    return np.asarray(out)
+
+
 def comb_of(lines: np.ndarray, df: float):
     """
     Return (centre, spacing) in Hz of a comb among ``lines`` (strongest first), or None.

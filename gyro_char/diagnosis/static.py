@@ -169,6 +169,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1)
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
     df = 1.0 / (obs.welch_segment(n) * dt)
+    lines = obs.narrow_lines(x, dt)
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
@@ -227,7 +228,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         # line between bins spreads its power differently from one on a bin). Where the PSD
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
-                                     obs.narrow_lines(x, dt)),
+                                     lines, obs.line_amplitudes(x, dt, lines[:3])),
         # A structural mode: band-limited noise around the same peak, of width f0 / q; its
         # centre is searched (a resonance's largest Welch bin need not be its centre).
         'resonance': EffectSpace('resonance', [
@@ -270,7 +271,7 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
 
 
 def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
-                    lines: Sequence[float] = ()) -> EffectSpace:
+                    lines: Sequence[float] = (), levels: Sequence[float] = ()) -> EffectSpace:
     """
     ``vibration``'s search: the tone at the strongest narrow peak; combs and tones if shown.
 
@@ -278,10 +279,11 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
     Where three or more sit on one lattice (``observables.comb_of``), a comb about the
     strongest is an alternative start: lines at centre + k spacing under a Lorentzian
     envelope whose width is fitted (a tone is its narrow limit). Where two or more lines
-    show, the three strongest as unrelated tones, each amplitude fitted (0 = absent), are
-    another. Line frequencies and the spacing, measured on the lines' peaks, are kept
-    (``estimated``): the observables hardly see a change within a bin, so a search would only
-    trade them for noise.
+    show, the three strongest as unrelated tones are another, each amplitude fitted within a
+    factor 2 of its line's measured amplitude (``levels``; a search from one tone at a time
+    crawls along the valley where their total power is right). Line frequencies and the
+    spacing, measured on the lines' peaks, are kept (``estimated``): the observables hardly
+    see a change within a bin, so a search would only trade them for noise.
     """
     amplitude = Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample)
     freq = (Param('freq_hz', max(f_tone - 2.0 * df, df), f_tone + 2.0 * df, log=False)
@@ -299,11 +301,13 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
     if lines.size >= 2:
         tones = lines[:3]
         names = [('freq_hz', 'amplitude'), ('freq2_hz', 'amplitude2'), ('freq3_hz', 'amplitude3')]
-        others.append(EffectSpace('vibration', [amplitude] + [
-            Param(a, 0.01 * sig_sample, 2.0 * sig_sample, off_at='lo')
-            for _, a in names[1:tones.size]],
+        lo, hi = 0.01 * sig_sample, 2.0 * sig_sample
+        start = [float(np.clip(v, lo, hi)) for v in levels] or [None] * tones.size
+        others.append(EffectSpace('vibration', [
+            Param(a, max(0.5 * v, lo), min(2.0 * v, hi), init=v) if v else Param(a, lo, hi)
+            for (_, a), v in zip(names[:tones.size], start)],
             fixed={f: float(v) for (f, _), v in zip(names, tones)},
-            estimated=tuple(f for f, _ in names[:tones.size])))
+            estimated=tuple(f for f, _ in names[:tones.size]), passes=2))
     return EffectSpace('vibration', [amplitude, freq], alternatives=tuple(others))
 
 
