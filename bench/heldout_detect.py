@@ -3,7 +3,8 @@ Detectability arithmetic the held-out shape sets share (where their edge levels 
 
 The sets themselves were written blind, one author each; these are the pieces of their
 ``detectability`` that came out the same: the Allan variance of a one-sided PSD and of a
-first-order Gauss-Markov process (static), a matched detector for a deterministic angle
+first-order Gauss-Markov process and a band's mean excess over white (static), a matched
+detector for a deterministic angle
 residual and the harmonic of a memoryless rate error (swing).
 """
 from functools import lru_cache
@@ -51,3 +52,15 @@ def fourier(err, amp: float, k: int, m: int = 20000) -> float:
     th = np.arange(m) * 2 * np.pi / m
     y = err(amp * np.cos(th), th)
     return float(2 * np.hypot(np.mean(y * np.cos(k * th)), np.mean(y * np.sin(k * th))))
+
+
+def band_excess(psd, dt: float, sig: float):
+    """
+    Return the mean excess of the one-sided ``psd(f)`` over white in its band, and its width.
+
+    White is 2 sig^2 dt; the band is where the excess is above half its peak; width in Hz.
+    """
+    f = np.linspace(0, 0.5 / dt, 200001)
+    ex = psd(f) / (2 * sig ** 2 * dt)
+    band = ex >= ex.max() / 2
+    return float(ex[band].mean()), float(band.sum() * (f[1] - f[0]))

@@ -67,7 +67,7 @@ products of 0.0093, 0.057 and 0.17 deg/s sd (tc 2.5 s, 2.5 s and 40 s); vernier 
 of 36, 55 and 110 arcsec with fine gains 10 %, 15 % and 25 % off; demodulated modes of 0.023,
 0.11 and 0.34 deg/s sd at 35 Hz (width 3 Hz) and 28 Hz (width 5 Hz).
 """
-from heldout_detect import gm_avar, psd_avar
+from heldout_detect import band_excess, gm_avar, psd_avar
 import numpy as np
 from scipy import signal, special
 
@@ -286,15 +286,6 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
     }
 
 
-def band_excess(params: dict, dt: float, sig: float):
-    """Mean PSD excess over white (2 sigma^2 dt) in the band above half its peak, its width."""
-    f = np.linspace(0, 0.5 / dt, 200001)
-    ex = complex_pole_psd(f, params['sigma'], params['freq'], params['q'], dt) / (
-        2 * sig ** 2 * dt)
-    band = ex >= ex.max() / 2
-    return float(ex[band].mean()), float(band.sum() * (f[1] - f[0]))
-
-
 def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
                   n: int = 720000) -> float:
     """Analytic z (sigmas above the white baseline's spread) of one level (module docstring)."""
@@ -312,7 +303,8 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         rel = [vernier_excess(m, p['step'], p['gain'], dt, n_arw) for m in (1, 10)]
         return abs(rel[0] - rel[1]) / np.sqrt(3 / n + 40 / (3 * n))
     if name == 'resonance':
-        ex, width = band_excess(p, dt, sig)
+        ex, width = band_excess(lambda f: complex_pole_psd(f, p['sigma'], p['freq'], p['q'], dt),
+                                dt, sig)
         return ex * np.sqrt(big_t * width)
     tau = np.geomspace(10 * dt, big_t / 10, 60)
     if name == 'bias_instability':

@@ -65,7 +65,7 @@ pickoff amplitudes of 61000, 15000 and 5000 counts (angle error sd 1.2, 5 and 15
 velocity modes of 0.021, 0.11 and 0.34 deg/s sd at 21.5 Hz (width 2 Hz) and 33 Hz (width
 4 Hz).
 """
-from heldout_detect import gm_avar, psd_avar
+from heldout_detect import band_excess, gm_avar, psd_avar
 import numpy as np
 from scipy import signal
 
@@ -256,15 +256,6 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
     }
 
 
-def band_excess(params: dict, dt: float, sig: float):
-    """Mean PSD excess over white (2 sigma^2 dt) in the band above half its peak, its width."""
-    f = np.linspace(0, 0.5 / dt, 200001)
-    ex = velocity_mode_psd(f, params['sigma'], params['freq'], params['q'], dt) / (
-        2 * sig ** 2 * dt)
-    band = ex >= ex.max() / 2
-    return float(ex[band].mean()), float(band.sum() * (f[1] - f[0]))
-
-
 def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
                   n: int = 720000) -> float:
     """Analytic z (sigmas above the white baseline's spread) of one level (module docstring)."""
@@ -282,7 +273,8 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         rel = [readout_excess(m, p['amplitude'], dt, n_arw) for m in (1, 10)]
         return float(abs(rel[0] - rel[1]) / np.sqrt(3 / n + 40 / (3 * n)))
     if name == 'resonance':
-        ex, width = band_excess(p, dt, sig)
+        ex, width = band_excess(lambda f: velocity_mode_psd(f, p['sigma'], p['freq'], p['q'], dt),
+                                dt, sig)
         return float(ex * np.sqrt(big_t * width))
     tau = np.geomspace(10 * dt, big_t / 10, 60)
     if name == 'bias_instability':
