@@ -110,10 +110,14 @@ def welch_psd(x: np.ndarray, dt: float) -> Tuple[np.ndarray, np.ndarray]:
     return signal.welch(x - x.mean(), fs=1.0 / dt, nperseg=welch_segment(x.size))
 
 
-def tone_prominence(f: np.ndarray, p: np.ndarray) -> np.ndarray:
+def running_median(p: np.ndarray) -> np.ndarray:
+    """Return the PSD's running median over ~1/10 of the band: the floor peaks stand on."""
+    return ndimage.median_filter(p, size=max(31, (p.size // 10) | 1), mode='nearest')
+
+
+def tone_prominence(f: np.ndarray, p: np.ndarray, base=None) -> np.ndarray:
     """log10(PSD / running median of the PSD) per frequency: narrow peaks stand out."""
-    # A window of ~1/10 of the band: wide enough that a peak a few bins wide stands out.
-    base = ndimage.median_filter(p, size=max(31, (p.size // 10) | 1), mode='nearest')
+    base = running_median(p) if base is None else base
     return np.log10(np.maximum(p, 1e-300) / np.maximum(base, 1e-300))
 
 
@@ -174,21 +178,26 @@ COMB_MAX_LINES = 64
 COMB_Z = 6.0            # a line stands this many robust sds of the bins' own scatter out
 
 
-def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z) -> np.ndarray:
+def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z):
     """
-    Return the frequencies (Hz) of the record's narrow lines, strongest first.
+    Return the record's narrow lines, strongest first: frequencies (Hz), amplitudes (rad/s).
 
     A line is a local maximum of the Welch PSD that stands ``z`` robust sds of the bins' own
     log scatter above the running median and above the PSD three bins to either side (beyond
     a Hann line's main lobe: a smooth band is not a line). Averaged Welch bins scatter by a
     few per cent, so many weak lines (kicks spread over a hundred harmonics) count, not only
     prominent ones. Frequencies are interpolated within the bin (a parabola through the log
-    PSD at the peak and its neighbours); at most ``COMB_MAX_LINES``.
+    PSD at the peak and its neighbours); at most ``COMB_MAX_LINES``. A line's power is its
+    excess over the running median summed over its main lobe (three bins either side) times
+    the bin width, its amplitude sqrt(2 power): a starting point for a search of several
+    tones at once, whose gap valley (their total power fixed) a one-at-a-time search from one
+    tone would crawl along.
     """
     f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
     if p.size < 16:
-        return np.zeros(0)
-    prom = tone_prominence(f, p)
+        return np.zeros(0), np.zeros(0)
+    base = running_median(p)
+    prom = tone_prominence(f, p, base)
     q = np.pad(p, 3, mode='edge')
     narrow = np.log10(np.maximum(p, 1e-300) / np.maximum(np.maximum(q[:-6], q[6:]), 1e-300))
     scatter = 1.4826 * float(np.median(np.abs(prom[3:] - np.median(prom[3:]))))
@@ -201,26 +210,10 @@ def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z) -> np.ndarray:
     i = np.clip(idx, 1, p.size - 2)
     den = lp[i - 1] - 2.0 * lp[i] + lp[i + 1]
     shift = np.where(den < 0, 0.5 * (lp[i - 1] - lp[i + 1]) / np.where(den < 0, den, -1.0), 0.0)
-    return f[i] + np.clip(shift, -0.5, 0.5) * f[1]
-
-
-def line_amplitudes(x: np.ndarray, dt: float, lines: np.ndarray) -> np.ndarray:
-    """
-    Return the amplitude (rad/s) of each of ``lines`` (Hz) from the record's Welch PSD.
-
-    A line's power is its PSD's excess over the running median, summed over its Hann main lobe
-    (three bins either side) times the bin width; the amplitude is sqrt(2 power). A starting
-    point for a search of several tones at once, whose gap valley (their total power fixed)
-    a one-at-a-time search from one tone would crawl along.
-    """
-    f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
-    base = ndimage.median_filter(p, size=max(31, (p.size // 10) | 1), mode='nearest')
+    freqs = f[i] + np.clip(shift, -0.5, 0.5) * f[1]
     excess = np.maximum(p - base, 0.0)
-    out = []
-    for f0 in np.atleast_1d(lines):
-        k = int(round(f0 / f[1]))
-        out.append(np.sqrt(2.0 * excess[max(k - 3, 0):k + 4].sum() * f[1]))
-    return np.asarray(out)
+    power = [excess[max(k - 3, 0):k + 4].sum() * f[1] for k in np.round(freqs / f[1]).astype(int)]
+    return freqs, np.sqrt(2.0 * np.asarray(power, dtype=float))
 
 
 def comb_of(lines: np.ndarray, df: float):
@@ -246,8 +239,3 @@ def comb_of(lines: np.ndarray, df: float):
     a = np.vstack([np.ones_like(k), k]).T
     c0, d = np.linalg.lstsq(a, fk, rcond=None)[0]
     return float(c0), float(d)
-
-
-def detected_comb(x: np.ndarray, dt: float, *, z: float = COMB_Z):
-    """Return (centre, spacing) in Hz of a comb of the record's narrow lines, or None."""
-    return comb_of(narrow_lines(x, dt, z=z), 1.0 / (welch_segment(np.size(x)) * dt))

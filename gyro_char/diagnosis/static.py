@@ -169,7 +169,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1)
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
     df = 1.0 / (obs.welch_segment(n) * dt)
-    lines = obs.narrow_lines(x, dt)
+    lines, levels = obs.narrow_lines(x, dt)
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
@@ -228,7 +228,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         # line between bins spreads its power differently from one on a bin). Where the PSD
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
-                                     lines, obs.line_amplitudes(x, dt, lines[:3])),
+                                     lines, levels),
         # A structural mode: band-limited noise around the same peak, of width f0 / q; its
         # centre is searched (a resonance's largest Welch bin need not be its centre).
         'resonance': EffectSpace('resonance', [
@@ -271,11 +271,12 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
 
 
 def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
-                    lines: Sequence[float] = (), levels: Sequence[float] = ()) -> EffectSpace:
+                    lines: Sequence[float], levels: Sequence[float]) -> EffectSpace:
     """
     ``vibration``'s search: the tone at the strongest narrow peak; combs and tones if shown.
 
-    ``lines``: the record's narrow lines, strongest first (``observables.narrow_lines``).
+    ``lines``, ``levels``: the record's narrow lines, strongest first, and their amplitudes
+    (``observables.narrow_lines``).
     Where three or more sit on one lattice (``observables.comb_of``), a comb about the
     strongest is an alternative start: lines at centre + k spacing under a Lorentzian
     envelope whose width is fitted (a tone is its narrow limit). Where two or more lines
@@ -302,10 +303,10 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
         tones = lines[:3]
         names = [('freq_hz', 'amplitude'), ('freq2_hz', 'amplitude2'), ('freq3_hz', 'amplitude3')]
         lo, hi = 0.01 * sig_sample, 2.0 * sig_sample
-        start = [float(np.clip(v, lo, hi)) for v in levels] or [None] * tones.size
+        start = np.clip(levels[:tones.size], lo, hi)
         others.append(EffectSpace('vibration', [
-            Param(a, max(0.5 * v, lo), min(2.0 * v, hi), init=v) if v else Param(a, lo, hi)
-            for (_, a), v in zip(names[:tones.size], start)],
+            Param(a, max(0.5 * v, lo), min(2.0 * v, hi), init=v)
+            for (_, a), v in zip(names, start.tolist())],
             fixed={f: float(v) for (f, _), v in zip(names, tones)},
             estimated=tuple(f for f, _ in names[:tones.size]), passes=2))
     return EffectSpace('vibration', [amplitude, freq], alternatives=tuple(others))
