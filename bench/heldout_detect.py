@@ -4,8 +4,8 @@ Detectability arithmetic the held-out shape sets share (where their edge levels 
 The sets themselves were written blind, one author each; these are the pieces of their
 ``detectability`` that came out the same: the Allan variance of a one-sided PSD and of a
 first-order Gauss-Markov process and a band's mean excess over white (static), a matched
-detector for a deterministic angle
-residual and the harmonic of a memoryless rate error (swing).
+detector for a deterministic angle residual, the harmonic of a memoryless rate error and a
+rate error averaged over the gyro's own noise (swing).
 """
 from functools import lru_cache
 
@@ -64,3 +64,20 @@ def band_excess(psd, dt: float, sig: float):
     ex = psd(f) / (2 * sig ** 2 * dt)
     band = ex >= ex.max() / 2
     return float(ex[band].mean()), float(band.sum() * (f[1] - f[0]))
+
+
+HERMITE = 64        # Gauss-Hermite nodes of the noise averages
+
+
+def noise_mean(err, w, s_n: float) -> np.ndarray:
+    """Mean of the memoryless ``err`` over the gyro's own noise (sd ``s_n``) at rates ``w``."""
+    x, wt = np.polynomial.hermite_e.hermegauss(HERMITE)
+    wt = wt / wt.sum()
+    return np.sum(wt * err(np.asarray(w)[..., None] + s_n * x), axis=-1)
+
+
+def noise_lines(err, amp_rate: float, s_n: float) -> float:
+    """Norm of lines k >= 2 of the noise-averaged memoryless rate error at amp_rate cos(th)."""
+    th = np.arange(4096) * 2 * np.pi / 4096
+    c = np.fft.rfft(noise_mean(err, amp_rate * np.cos(th), s_n)) / th.size
+    return float(2 * np.linalg.norm(c[2:61]))

@@ -59,7 +59,7 @@ anomalies of 0.022, 0.11 and 0.34 deg/s; asymmetries of 0.11 %, 0.4 % and 1 %; b
 of 0.25, 1 and 4 us; track skews of 0.52, 2.5 and 10 us (a multiplexed converter's).
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import fourier, matched_z
+from heldout_detect import fourier, matched_z, noise_mean
 import numpy as np
 
 G0 = 9.80665
@@ -67,7 +67,6 @@ SAT_FORCE = 1.6               # m/s^2: specific force at which the sense mass me
 BUMP_AT, BUMP_WIDTH = 0.3, 0.02       # rad/s: the mode crossing's rate and its half width
 CONTACT_DWELL = 90.0          # s: mean dwell of the driver contact, open and closed alike
 SIGNAL_LINES = 2048           # sine-cosine signal periods per turn of the encoder
-HERMITE = 64                  # Gauss-Hermite nodes for the noise-averaged transfer error
 
 
 def sat_force(f_y: np.ndarray) -> np.ndarray:
@@ -140,9 +139,7 @@ def shapes(rate_hz: float) -> dict:
 
 def smoothed_bump(w: np.ndarray, e0: float, s_n: float) -> np.ndarray:
     """Mean of ``bump`` over the gyro's own noise (sd s_n) at the true rate ``w``."""
-    x, wt = np.polynomial.hermite_e.hermegauss(HERMITE)
-    wt = wt / wt.sum()
-    return np.sum(wt * bump(np.asarray(w)[..., None] + s_n * x, e0), axis=-1)
+    return noise_mean(lambda v: bump(v, e0), w, s_n)
 
 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,

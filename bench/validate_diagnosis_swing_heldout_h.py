@@ -45,13 +45,12 @@ dead-band offsets of 0.011, 0.034 and 0.11 deg/s; square-law terms b of 1.1e-3, 
 head tilts of 0.39, 2 and 6 mrad of line phase between the tracks.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import fourier, matched_z
+from heldout_detect import fourier, matched_z, noise_mean
 import numpy as np
 
 G0 = 9.80665
 DEAD_WIDTH = 0.01             # rad/s: the rate over which the sign offset is smoothed
 SIGNAL_LINES = 2048           # sine-cosine signal periods per turn of the encoder
-HERMITE = 64                  # Gauss-Hermite nodes for the noise-averaged transfer error
 STEP_AT = (0.3, 0.7)          # the latency step falls in this fraction of the run
 
 
@@ -110,9 +109,7 @@ def shapes(rate_hz: float) -> dict:
 
 def smoothed_offset(w: np.ndarray, e0: float, s_n: float) -> np.ndarray:
     """Mean of ``sign_offset`` over the gyro's own noise (sd s_n) at the true rate ``w``."""
-    x, wt = np.polynomial.hermite_e.hermegauss(HERMITE)
-    wt = wt / wt.sum()
-    return np.sum(wt * sign_offset(np.asarray(w)[..., None] + s_n * x, e0), axis=-1)
+    return noise_mean(lambda v: sign_offset(v, e0), w, s_n)
 
 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,

@@ -50,7 +50,7 @@ z. Physical scale: delays of 0.188 (edge), 1 and 3 ms; g_y (settled) of 2.1e-5, 
 of 4.7e-4, 3e-3 and 1e-2 of the track amplitude.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import matched_z
+from heldout_detect import matched_z, noise_lines
 import numpy as np
 from scipy import signal, special
 
@@ -59,7 +59,6 @@ SETTLE_EXCESS, SETTLE_TAU = 2.0, 200.0      # initial extra g-coefficient; its r
 ONSET = 0.25                                # rad/s: where the asymmetric gain sets in
 MAINS_HZ = 50.0
 TRACK_LINES = 1250                          # signal periods per turn of the encoder
-HERMITE = 64
 
 
 def allpass(x: np.ndarray, d_samples: float) -> np.ndarray:
@@ -125,17 +124,6 @@ def shapes(rate_hz: float) -> dict:
         'encoder_cyclic_error': (interleaved, [{'eps': 3e-3}, {'eps': 1e-2},
                                                {'eps': 4.66e-4}]),
     }
-
-
-def noise_lines(err, amp_rate: float, s_n: float) -> float:
-    """Norm of lines k >= 2 of the noise-averaged memoryless rate error at amp_rate cos(th)."""
-    x, wt = np.polynomial.hermite_e.hermegauss(HERMITE)
-    wt = wt / wt.sum()
-    th = np.arange(4096) * 2 * np.pi / 4096
-    w = amp_rate * np.cos(th)
-    mean_err = np.sum(wt * err(w[:, None] + s_n * x), axis=-1)
-    c = np.fft.rfft(mean_err) / th.size
-    return float(2 * np.linalg.norm(c[2:61]))
 
 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,

@@ -54,7 +54,7 @@ deg/s/g, the same per g^2); dead-time scales W of 315, 20 and 6 rad/s (compressi
 at a 50 mm radius).
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import fourier, matched_z
+from heldout_detect import fourier, matched_z, noise_lines
 import numpy as np
 from scipy import signal
 
@@ -63,7 +63,6 @@ SQUARE = 1.0                                # g^2 coefficient / g coefficient, p
 ASYM_SWING, ASYM_TC = 0.5, 60.0             # relative sd and correlation time of a(t)
 BEAT_HZ = 0.37                              # beat of the gyro and encoder clocks
 JOINT, HEAD = np.deg2rad(7.0), np.deg2rad(0.05)
-HERMITE = 64
 
 
 def conversion_instants(t: np.ndarray, period: float, phase: float) -> np.ndarray:
@@ -142,16 +141,6 @@ def shapes(rate_hz: float) -> dict:
         'encoder_cyclic_error': (joint, [{'gap': 8 * arcsec}, {'gap': 30 * arcsec},
                                          {'gap': 1.29 * arcsec}]),
     }
-
-
-def noise_lines(err, amp_rate: float, s_n: float) -> float:
-    """Norm of lines k >= 2 of the noise-averaged memoryless rate error at amp_rate cos(th)."""
-    x, wt = np.polynomial.hermite_e.hermegauss(HERMITE)
-    wt = wt / wt.sum()
-    th = np.arange(4096) * 2 * np.pi / 4096
-    mean_err = np.sum(wt * err(amp_rate * np.cos(th)[:, None] + s_n * x), axis=-1)
-    c = np.fft.rfft(mean_err) / th.size
-    return float(2 * np.linalg.norm(c[2:61]))
 
 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
