@@ -57,3 +57,18 @@ def test_joint_refit_corrects_an_effect_fitted_before_its_overlapping_partner():
     assert abs(params['a']['k'] - 2.0) < 0.1 and abs(params['b']['k'] - 1.0) < 0.1
     assert d.refined['gap_after'] == d.final_gap < 0.5 * d.refined['gap_before']
     assert d.to_json()['refined']['params']['a']['k'] == params['a']['k']
+
+
+def test_a_coordinate_step_never_ends_worse_than_its_start():
+    # A narrow valley (k = 0.3 +- 5 %) off a slope that falls towards the lower bound: the
+    # grid and its Brent bracket find the bound; a search started in the valley keeps it.
+    def simulate(i, effects, s):
+        k = dict(effects).get('a', {}).get('k', 1e-3)
+        cost = 0.0 if abs(np.log(k / 0.3)) < 0.05 else 1.0 + np.log(k / 0.01) ** 2
+        return {'a': np.full(4, cost + 0.01 * s)}
+    objective = GapObjective([{'a': np.zeros(4)}], simulate, range(4))
+    objective.set_reference(objective.evaluate([]))
+    space = EffectSpace('a', [Param('k', 0.01, 10.0, init=0.3)])
+    cold, cold_ev = fit_effect(objective, [], EffectSpace('a', [Param('k', 0.01, 10.0)]))
+    params, ev = fit_effect(objective, [], space)
+    assert abs(np.log(params['k'] / 0.3)) < 0.05 and ev.gap < 0.5 * cold_ev.gap

@@ -196,6 +196,11 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
                 us = np.array([_to_u(p, v) for v in whole])
             else:
                 us = np.linspace(lo_u, hi_u, grid)
+            # The current value is a candidate too: a step never ends worse than where it
+            # started (a data-driven start between grid points, a good first coordinate).
+            u_now = _to_u(p, values[p.name])
+            if np.min(np.abs(us - u_now)) > 1e-9:
+                us = np.sort(np.r_[us, u_now])
             evals = []
             for u in us:
                 e = run({**values, p.name: _from_u(p, u)})

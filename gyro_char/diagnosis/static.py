@@ -18,6 +18,7 @@ from typing import List, Optional, Sequence
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.starts import markov_start
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
 from gyro_char.errors import InputError
 from gyro_char.sim import simulator
@@ -197,6 +198,11 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     adev_long = float(obs.overlapping_adev(y, np.array([obs.octave_m(n)[-1]]))[0])
     b_hi = max(30.0 * sig_long, 3.0 * adev_long / 0.664)
     k_hi = max(30.0 * k_long, 3.0 * adev_long * np.sqrt(3.0 / tau_max))
+    gm_sigma = (0.1 * sig_long, max(2.0 * sig_sample, 3.0 * adev_long))
+    # A correlation time whose Allan turnover (~1.9 tc) lies beyond the longest analysed tau
+    # cannot be told from a random walk there: the simpler walk takes it.
+    gm_tau = (3 * dt, tau_max / 2)
+    gm_start = markov_start(y, dt, base.N, *gm_tau, *gm_sigma)
     spaces = {
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
         # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline.
@@ -214,10 +220,11 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             passes=2),
         'rate_random_walk': EffectSpace('rate_random_walk', [
             Param('K', 0.1 * k_long, k_hi)]),
+        # Started where the record's Allan excess puts a first-order process (``starts``).
         'gauss_markov': EffectSpace('gauss_markov', [
-            Param('sigma', 0.1 * sig_long, max(2.0 * sig_sample, 3.0 * adev_long)),
-            Param('tau_s', 3 * dt, length / 4),
-            Param('order', 1, 2, integer=True, choice=True)]),
+            Param('sigma', *gm_sigma, init=gm_start[0] if gm_start else None),
+            Param('tau_s', *gm_tau, init=gm_start[1] if gm_start else None),
+            Param('order', 1, 2, integer=True, choice=True)], passes=2),
         # Plain (angle error correlated when the step is coarse) or dithered (white error).
         'quantization': EffectSpace('quantization', [
             Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt)),
