@@ -134,14 +134,14 @@ def hvac_gm(n: int, sd: float, tc: float, dt: float, rng) -> np.ndarray:
     return sd * signal.lfilter([1.0], [1.0, -a], w)
 
 
-def fallback_mask(n: int, dt: float, rng) -> np.ndarray:
-    """1 while the interpolator has fallen back to whole counts (two-state Markov), else 0."""
-    coarse = rng.uniform() < COARSE_S / (LOCKED_S + COARSE_S)
+def two_state(n: int, dt: float, mean_on: float, mean_off: float, rng) -> np.ndarray:
+    """1 / 0 episodes of exponential length (means in s), started from the stationary law."""
+    on = rng.uniform() < mean_on / (mean_on + mean_off)
     mask, at = np.zeros(n), 0
     while at < n:
-        length = int(np.ceil(rng.exponential(COARSE_S if coarse else LOCKED_S) / dt))
-        mask[at:at + length] = coarse
-        at, coarse = at + length, not coarse
+        length = int(np.ceil(rng.exponential(mean_on if on else mean_off) / dt))
+        mask[at:at + length] = on
+        at, on = at + length, not on
     return mask
 
 
@@ -214,7 +214,7 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
 
     def fallback(x, rng, step):
         start = rng.uniform(0, step)
-        mask = fallback_mask(x.size, dt, rng)
+        mask = two_state(x.size, dt, COARSE_S, LOCKED_S, rng)
         err = mask * np.mod(start + np.cumsum(x) * dt, step)     # read = theta - err
         return x - np.diff(np.r_[mask[0] * start, err]) / dt
 
