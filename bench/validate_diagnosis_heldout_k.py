@@ -1,7 +1,74 @@
 """
 Held-out set K of static effect shapes: written blind, without running the diagnosis.
 
-DOCSTRING PLACEHOLDER
+Same interface as ``validate_diagnosis_heldout_j.py`` (``shapes(dt, sig, n_arw)``, levels
+[weak, strong, edge of detectability on a 2 h record]); every shape is a physical form unlike
+the catalogue's, the development shapes (``validate_diagnosis.py``) and held-out sets A-J, and
+the kinds of departure differ from shape to shape:
+
+- internal_lowpass: a jitter gate: the sensor hub smooths only what it takes for jitter; a new
+  sample within s of the current output moves it a quarter of the way, y_k = y_(k-1) +
+  0.25 (x_k - y_(k-1)), a larger change passes at once, y_k = x_k: a nonlinear, data-selective
+  smoother with memory, heavy smoothing of small changes, none of large ones (a one-pole of
+  0.75 as s grows, the identity as s falls);
+- vibration: a shaker test next door: a sine sweep 10 -> 40 -> 10 Hz at one octave a minute
+  (logarithmic, continuous phase, IEC 60068-2-6 style), held at constant acceleration, so the
+  bench's rocking rate falls as 1 / f (A at 10 Hz, A / 4 at 40 Hz): a deterministic waveform
+  whose power is spread over a band, density ~ f^-3, no line;
+- temperature_drift: a fan-interrupted warm-up: the die warms with a 600 s lag toward T_hot
+  until the board reaches the fan's thermostat at 0.6 T_hot (550 s after power-on); the fan
+  then cools it, with a 200 s lag, toward 0.3 T_hot: a rise, a kink (the slope jumps from
+  +A / 1500 s to -A / 667 s) and a settling to a lower level; the record starts 0-60 s after
+  power-on;
+- bias_instability: nulled flicker: the quadrature error has flicker noise, the quadrature
+  loop (an integrator, time constant 200 s) nulls its slow part and the demodulation phase
+  error leaks the rest into the rate: white noise of sd b through (1 - z^-1)^-1/2 and the
+  loop's residual (1 - z^-1) / (1 - (1 - dt / 200 s) z^-1): PSD b^2 / (pi f) above the 8e-4
+  Hz corner, rising as f below it (no power at DC);
+- rate_random_walk: a ratchet: the die attach slips under a steady stress at Poisson times
+  (one per 20 s), always the same way, by exponentially distributed amounts, and creeps back
+  between slips at the steady rate that balances them: sudden steps up, straight ramps down,
+  a walk with independent, skewed increments (skewness 2.1 / sqrt(lambda tau)), K^2 = 2
+  lambda beta^2;
+- gauss_markov: a blower-modulated Markov process: convective temperature noise with the
+  package's correlation time tc, driven by turbulence whose intensity follows the HVAC blower,
+  1 + 0.9 sin(2 pi t / 900 s): cyclostationary (its variance swings 0.1-1.9 x, lagged by tc),
+  a Gaussian scale mixture overall, time-averaged autocorrelation exactly exp(-|tau| / tc);
+- quantization: interpolator fallback: an interpolated fringe read-out drops to whole-fringe
+  counting (the floor quantizer of step Q) whenever its interpolator loses lock, in spells of
+  mean 60 s between locked spells of mean 300 s (a two-state Markov chain, 1/6 of the time):
+  intermittent angle quantization, the read angle stepping by the floor error at each switch;
+- resonance: an aliased mode: a mount mode above the output Nyquist frequency, the output
+  read from an internal stream 10 x faster by taking every 10th sample (no anti-alias
+  filter): the line folds to |f0 - k / dt| (137 Hz to 37 Hz, 172 Hz mirrored to 28 Hz),
+  its skirts folded too (the mirrored one steep side down), and all images add a floor.
+
+Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T = n dt, 2 h):
+
+- jitter gate: lag-1 autocorrelation against 1 / sqrt(n); the output is a Markov chain whose
+  stationary law is solved on a grid, E[y y'] from the exact conditional mean (1 - a)(y A -
+  M) (A, M the input's mass and first moment within s of y): r1 grows as s^3 at first;
+- shaker, aliased mode: mean excess PSD / white over the band above half its peak, times
+  sqrt(T B) (as sets H-J): the sweep's mean PSD (A f1 / f)^2 / (2 f ln 4) on 10-40 Hz (time
+  share 1 / (f ln 4) per Hz), the mode's internal PSD summed over its ten images;
+- fan warm-up: matched to its own noise-free waveform, mean removed: |s - mean(s)| / sigma;
+- nulled flicker, ratchet, blower: Allan variance excess over N^2 / tau in units of the white
+  spread N^2 / tau sqrt(2 / edf), edf = 1.5 T / tau, best tau in [10 dt, T / 10]: the
+  flicker from its exact PSD, the ratchet q^2 (2 m^2 + 1) / (6 m) with q^2 = K^2 dt (a walk of
+  independent steps, m samples a block), the blower the first-order Gauss-Markov formula (its
+  time-averaged autocorrelation over whole blower cycles);
+- fallback: the angle error e = s u, s the fallback state and u = theta mod Q (theta walking
+  by the white noise), c(m) = R_s(m) E[u_k u_(k+m)] - d^2 Q^2 / 4, R_s(m) = d^2 + d (1 - d)
+  rho^m, E[u u'] = Q^2 / 4 + 2 sum_h (Q / 2 pi h)^2 exp(-2 pi^2 h^2 m dt N^2 / Q^2): relative
+  Allan excess (3 c0 - 4 c_m + c_2m) / (m dt N^2) at dt less at 10 dt, against sqrt(3 / n +
+  40 / (3 n)).
+Edges are set at z ~ 4; weak and strong are several to hundreds of times further in z.
+Physical scale: gate thresholds of 0.16 (edge), 0.4 and 1.2 deg/s; sweeps of 0.060, 0.17 and
+0.57 deg/s at 10 Hz; warm-ups to 0.032, 0.14 and 0.34 deg/s (2.3-25 degC at 0.0135
+(deg/s)/degC); nulled flicker b of 16, 41 and 124 deg/h; ratchets of K 2e-6 to 2e-5
+rad/s/sqrt(s) (mean slips of 0.00037-0.0036 deg/s); blower-driven noise of 0.0089, 0.057
+and 0.11 deg/s sd (tc 3 s, 3 s and 30 s); fallback fringes of 10, 43 and 115 arcsec; aliased
+modes of 0.028, 0.11 and 0.34 deg/s sd, 137 Hz (width 6.9 Hz) and 172 Hz (width 11.5 Hz).
 """
 from heldout_detect import band_excess, gm_avar, psd_avar
 import numpy as np

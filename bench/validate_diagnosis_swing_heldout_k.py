@@ -1,7 +1,55 @@
 """
 Held-out swing set K: written blind, without running the diagnosis, run once at the end.
 
-DOCSTRING PLACEHOLDER
+Same interface as ``validate_diagnosis_swing_heldout_j.py``: ``shapes(rate_hz)`` gives
+``{name: (fn, [weak, strong, edge])}``, ``fn(imu_t, gyro, enc_t, enc_angle, stand, rng,
+**params) -> (imu_t, gyro, enc_t, enc_angle)``, ``stand(t)`` the true (angle, rate). Each shape
+is unlike the catalogue's, the development harness's and sets B-J, and the kinds of departure
+differ from shape to shape:
+
+- time_delay: a notch: the gyro's second-order notch filter (set against a mount mode at f_n,
+  width f_n / q) on the rate values, motion and noise alike; below the notch it delays by
+  ~1 / (2 pi f_n q) with unit gain, and the gyro's noise leaves with a hole at f_n;
+- g_sensitivity: creep of the die attach: the g-induced deflection relaxes through a broad
+  spectrum of times (16 one-poles, 0.01-1000 s, equal weights, the relaxed compliance twice the
+  unrelaxed): bias g_y (f_y + (1 / 16) sum_j LP_j(f_y)), f_y = g sin(phi), from rest: a linear
+  response with a nearly constant loss angle (5.4, 5.2 and 5.0 deg at 2.5, 5 and 10 s);
+- scale_factor_nonlinearity: a clipped carrier: the sense front end (range R) carries the
+  Coriolis carrier w cos plus the quadrature 0.8 R sin and clips at +-R before demodulation,
+  so the output is w g(R / sqrt(w^2 + 0.64 R^2)), g(r) = (2 / pi)(asin r + r sqrt(1 - r^2))
+  the clip's describing function (output value, noise included): exactly linear up to |w| =
+  0.6 R, then a 3/2-power onset, saturating at 4 R / pi;
+- scale_factor_asymmetry: an oven-cycled asymmetry: the catalogue's a |w| (output value), its
+  coefficient following the torquer driver's halves through the oven thermostat's 120 s
+  cycle, a (1 + 0.8 tri(t / 120 s)): a periodic swing of the 2f line, sidebands at 1 / 120 s;
+- timestamp_jitter: a busy host: the encoder's stamps are late by U h, U uniform, h = 5 us
+  while the host is quiet and h (the level) while it is busy, in spells of mean 0.5 s every
+  ~5 s (two-state Markov, 10 % of the time), the mean calibrated out: intermittent, clustered
+  scatter plus a telegraph-like offset of the spell means;
+- encoder_cyclic_error: cumulative pitch error: the disk's 4096 lines were ruled by a
+  dividing engine whose line-to-line pitch errors add up, closed over the circle (a Brownian
+  bridge, one fixed disk), linear between lines: a smooth, red, random function of the angle.
+
+Levels (``detectability``; 15 min, 1 kHz gyro and encoder, adis16405 preset: A = 20 deg, the
+5 s period, N its gyro's ARW; s = N sqrt(2 / T) the sd of a fitted rate-residual sine):
+
+- creep: the harmonics k = 1..6 of g_y f_y times the creep's gain at k w, in quadrature,
+  against s;
+- clipped carrier, oven-cycled asymmetry: the lines k >= 2 of the rate error at A w cos(wt),
+  the error first averaged over the gyro's own noise (Gauss-Hermite), in quadrature, against
+  s (the asymmetry at its mean coefficient a, sidebands not counted);
+- notch, disk: matched detector on the noise-free angle residual (the integrated rate error
+  of the notched motion; the disk's error with offset and scale fitted out) against the gyro
+  angle noise N^2 / (2 pi f)^2, the encoder's white floor and the preset's stamp jitter;
+- busy host: a quadratic detector on the angle error -phi_dot e(t), e of two-sided PSD
+  ((h - h_q) / 2)^2 d (1 - d) 2 t_c / (1 + (2 pi f t_c)^2) (the spells' means) + E[h^2] / 12
+  / f_s (the scatter), shifted by +-1 / 5 s, z = sqrt(T / 2 int (S_r / S_n)^2 df) (as set E).
+Edges are at z ~ 4 at the 5 s period; weak and strong are several to hundreds of times
+further in z. Physical scale: notches at 90 Hz (q 9.6, delay 0.19 ms), 53 Hz and 20 Hz (q 2,
+1.5 and 4 ms); unrelaxed g_y of 2.2e-5, 2e-4 and 5e-4 rad/s/(m/s^2) (0.012-0.28 deg/s/g);
+front-end ranges of 42, 39 and 32 deg/s (quadrature 34, 31, 25 deg/s; onsets 25.3, 23.4 and
+18.9 deg/s against the swing's 25.1 deg/s peak); mean asymmetries a of 5.45e-4 (edge), 0.01
+and 0.04; busy spreads of 29, 150 and 400 us; disk errors of 2.8, 12 and 40 arcsec rms.
 """
 from gyro_char.sim.config import BenchConfig
 from heldout_detect import matched_z, noise_lines
@@ -116,7 +164,7 @@ def shapes(rate_hz: float) -> dict:
     return {
         'time_delay': (notch_delay, [{'notch_hz': 53.0, 'q': 2.0},
                                      {'notch_hz': 20.0, 'q': 2.0},
-                                     {'notch_hz': 400.0, 'q': 3.8}]),
+                                     {'notch_hz': 90.0, 'q': 9.6}]),
         'g_sensitivity': (creeping, [{'gy': 2e-4}, {'gy': 5e-4}, {'gy': 2.2e-5}]),
         'scale_factor_nonlinearity': (clipped, [{'full': 0.68}, {'full': 0.55},
                                                 {'full': 0.7365}]),
