@@ -234,7 +234,7 @@ def mode_coeffs(freq: float, q: float, dt_in: float):
 
 
 def aliased_mode(n: int, sigma: float, freq: float, q: float, dt: float, rng) -> np.ndarray:
-    """A mode run at OVER x the output rate and read every OVER-th sample (no anti-alias)."""
+    """Return a mode run at OVER x the output rate, read every OVER-th sample (no anti-alias)."""
     a1, a2, var = mode_coeffs(freq, q, dt / OVER)
     burn = int(20 * q / (np.pi * freq * dt)) + 10                 # output samples
     zi, out, chunk = np.zeros(2), [], 2 ** 16

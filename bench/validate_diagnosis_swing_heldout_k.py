@@ -53,9 +53,9 @@ and 0.04; busy spreads of 29, 150 and 400 us; disk errors of 2.8, 12 and 40 arcs
 """
 from gyro_char.sim.config import BenchConfig
 from heldout_detect import matched_z, noise_lines
-from validate_diagnosis_heldout_k import two_state
 import numpy as np
 from scipy import signal
+from validate_diagnosis_heldout_k import two_state
 
 G0 = 9.80665
 CREEP_TAUS = np.geomspace(0.01, 1000.0, 16)     # s: the die attach's relaxation times
@@ -91,7 +91,7 @@ def creep_gain(w, dt: float) -> np.ndarray:
 
 
 def clip_gain(r) -> np.ndarray:
-    """Describing function of a clip at r (of the carrier's amplitude): 1 for r >= 1."""
+    """Return the describing function of a clip at r (of the carrier's amplitude), 1 if r >= 1."""
     r = np.minimum(np.asarray(r, float), 1.0)
     return 2 / np.pi * (np.arcsin(r) + r * np.sqrt(1 - r * r))
 
@@ -169,8 +169,7 @@ def shapes(rate_hz: float) -> dict:
         'scale_factor_nonlinearity': (clipped, [{'full': 0.68}, {'full': 0.55},
                                                 {'full': 0.7365}]),
         'scale_factor_asymmetry': (cycled, [{'a': 0.01}, {'a': 0.04}, {'a': 5.45e-4}]),
-        'timestamp_jitter': (busy_host, [{'busy': 1.5e-4}, {'busy': 4e-4},
-                                          {'busy': 2.9e-5}]),
+        'timestamp_jitter': (busy_host, [{'busy': 1.5e-4}, {'busy': 4e-4}, {'busy': 2.9e-5}]),
         'encoder_cyclic_error': (ruled, [{'rms': 12 * arcsec}, {'rms': 40 * arcsec},
                                          {'rms': 2.8 * arcsec}]),
     }

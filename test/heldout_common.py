@@ -53,7 +53,7 @@ def fold_lines(err, kmax=60):
 
 
 def noisy_run(seed=13):
-    """A 900 s, 1 kHz swing's true rate plus the preset gyro's white noise: (t, gyro)."""
+    """Return (t, gyro): a 900 s, 1 kHz swing's true rate plus the preset gyro's white noise."""
     t = np.arange(900000) * 1e-3
     rate = AMP * W * np.cos(W * t)
     n_pre = S_LINE / np.sqrt(2 / 900.0)                                # the preset's N
