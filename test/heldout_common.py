@@ -45,6 +45,22 @@ def stand(t):
     return AMP * np.sin(W * t), AMP * W * np.cos(W * t)
 
 
+def fold_lines(err, kmax=60):
+    """Norm of lines 2..kmax of ``err`` folded over the 5 s swing period (1 kHz samples)."""
+    m = 5000
+    mean = err[:err.size // m * m].reshape(-1, m).mean(axis=0)
+    return float(2 * np.linalg.norm(np.fft.rfft(mean)[2:kmax + 1] / m))
+
+
+def noisy_run(seed=13):
+    """Return (t, gyro): a 900 s, 1 kHz swing's true rate plus the preset gyro's white noise."""
+    t = np.arange(900000) * 1e-3
+    rate = AMP * W * np.cos(W * t)
+    n_pre = S_LINE / np.sqrt(2 / 900.0)                                # the preset's N
+    return t, rate + n_pre * np.sqrt(1000.0) * np.random.default_rng(seed).standard_normal(
+        t.size)
+
+
 def swing(fn, p, duration=60.0, stand=stand):
     t = np.arange(int(duration * 1000)) * 1e-3
     angle, rate = stand(t)
