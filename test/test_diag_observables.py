@@ -40,6 +40,23 @@ def test_tone_found_at_its_frequency_and_not_in_white_noise():
     assert f.size >= 1 and abs(f[0] - 19.3) < 0.1
 
 
+def test_broad_peak_finds_a_wide_mode_and_nothing_in_monotone_spectra():
+    rng = np.random.default_rng(13)
+    n = 2 ** 20
+    white = rng.standard_normal(n)
+    # A mode at 28 Hz of width ~3 Hz (q ~ 9): no narrow peak, a bump 10x over the white floor.
+    r, th = np.exp(-np.pi * 3.0 * DT), 2 * np.pi * 28.0 * DT
+    mode = signal.lfilter([1.0], [1, -2 * r * np.cos(th), r * r], rng.standard_normal(n))
+    mode *= 1.0 / np.std(mode)
+    f_b = obs.broad_peak(obs.welch_psd(white + mode, DT))
+    assert f_b is not None and abs(f_b - 28.0) < 1.5
+    assert obs.narrow_lines(white + mode, DT)[0].size == 0
+    flicker = np.cumsum(rng.standard_normal(n)) * 0.01           # a falling spectrum
+    lowpassed = signal.lfilter([0.25] * 4, [1.0], white)           # a falling spectrum
+    for x in (white, white + flicker, lowpassed, np.diff(white)):  # np.diff: a rising one
+        assert obs.broad_peak(obs.welch_psd(x, DT)) is None
+
+
 def test_drift_block_sees_a_warm_up_but_not_a_line():
     rng = np.random.default_rng(4)
     n = 2 ** 15

@@ -158,9 +158,13 @@ def static_observables(x: np.ndarray, layout: Layout) -> Dict[str, np.ndarray]:
 
 
 def detected_tones(x: np.ndarray, dt: float, *, min_prominence: float = 0.5,
-                   max_tones: int = 3) -> np.ndarray:
-    """Frequencies (Hz) of the strongest narrow peaks, 3x above the running median or more."""
-    f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
+                   max_tones: int = 3, psd=None) -> np.ndarray:
+    """
+    Frequencies (Hz) of the strongest narrow peaks, 3x above the running median or more.
+
+    ``psd``: the record's ``welch_psd``, if the caller has it already.
+    """
+    f, p = welch_psd(np.asarray(x, dtype=np.float64), dt) if psd is None else psd
     prom = tone_prominence(f, p)
     prom[:2] = 0.0
     order = np.argsort(prom)[::-1]
@@ -176,9 +180,11 @@ def detected_tones(x: np.ndarray, dt: float, *, min_prominence: float = 0.5,
 COMB_MIN_LINES = 3      # lines on one lattice before a comb is searched
 COMB_MAX_LINES = 64
 COMB_Z = 6.0            # a line stands this many robust sds of the bins' own scatter out
+BUMP_RISE = 0.2         # a broad bump rises this much (natural log) on both sides
+BUMP_MIN_BIN = 20       # the lowest Welch bin a broad bump is looked for in
 
 
-def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z):
+def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z, psd=None):
     """
     Return the record's narrow lines, strongest first: frequencies (Hz), amplitudes (rad/s).
 
@@ -191,9 +197,9 @@ def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z):
     excess over the running median summed over its main lobe (three bins either side) times
     the bin width, its amplitude sqrt(2 power): a starting point for a search of several
     tones at once, whose gap valley (their total power fixed) a one-at-a-time search from one
-    tone would crawl along.
+    tone would crawl along. ``psd``: the record's ``welch_psd``, if the caller has it already.
     """
-    f, p = welch_psd(np.asarray(x, dtype=np.float64), dt)
+    f, p = welch_psd(np.asarray(x, dtype=np.float64), dt) if psd is None else psd
     if p.size < 16:
         return np.zeros(0), np.zeros(0)
     base = running_median(p)
@@ -214,6 +220,36 @@ def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z):
     excess = np.maximum(p - base, 0.0)
     power = [excess[max(k - 3, 0):k + 4].sum() * f[1] for k in np.round(freqs / f[1]).astype(int)]
     return freqs, np.sqrt(2.0 * np.asarray(power, dtype=float))
+
+
+def broad_peak(psd, *, rise: float = BUMP_RISE):
+    """
+    Return the frequency (Hz) of the PSD's highest broad bump, or None.
+
+    A bump is a local maximum of the log PSD averaged over +-10 % in frequency.
+    It must rise by ``rise`` (natural log) above that average's minimum within an octave on
+    each side, so a spectrum that only falls or only rises has none. A narrow line averages
+    into a small bump. Only bins from BUMP_MIN_BIN up count: below, the +-10 % average holds
+    too few bins to be steady.
+    """
+    f, p = psd
+    if p.size < 4 * BUMP_MIN_BIN:
+        return None
+    lp = np.log(np.maximum(p, 1e-300))
+    k = np.arange(p.size)
+    cs = np.r_[0.0, np.cumsum(lp)]
+    lo = np.maximum(np.floor(0.9 * k).astype(int), 1)
+    hi = np.minimum(np.ceil(1.1 * k).astype(int) + 1, p.size)
+    sm = (cs[hi] - cs[np.minimum(lo, hi - 1)]) / np.maximum(hi - lo, 1)
+    best, best_f = None, None
+    for i in range(BUMP_MIN_BIN, p.size - 1):
+        below, above = sm[i // 2:i + 1], sm[i:min(2 * i, p.size - 1) + 1]
+        if sm[i] < below.max() or sm[i] < above.max():
+            continue
+        if min(sm[i] - below.min(), sm[i] - above.min()) >= rise and (
+                best is None or sm[i] > best):
+            best, best_f = sm[i], float(f[i])
+    return best_f
 
 
 def comb_of(lines: np.ndarray, df: float):

@@ -19,6 +19,7 @@ from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.starts import markov_start
+from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
 from gyro_char.errors import InputError
 from gyro_char.sim import simulator
@@ -167,10 +168,11 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     sig_long = base.N / np.sqrt(tau_max)
     sig_sample = base.N / np.sqrt(dt)
     # The most prominent narrow peak, however weak: if a tone is there at all, that is where.
-    tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1)
+    psd = obs.welch_psd(x, dt)
+    tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1, psd=psd)
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
     df = 1.0 / (obs.welch_segment(n) * dt)
-    lines, levels = obs.narrow_lines(x, dt)
+    lines, levels = obs.narrow_lines(x, dt, psd=psd)
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
@@ -236,12 +238,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
                                      lines, levels),
-        # A structural mode: band-limited noise around the same peak, of width f0 / q; its
-        # centre is searched (a resonance's largest Welch bin need not be its centre).
-        'resonance': EffectSpace('resonance', [
-            Param('sigma', 0.01 * sig_sample, 2.0 * sig_sample),
-            Param('freq_hz', 0.85 * f_tone, min(1.15 * f_tone, 0.45 / dt), log=False),
-            Param('q', 1.0, 300.0)]),
+        'resonance': resonance_space(sig_sample, f_tone, dt, obs.broad_peak(psd)),
     }
     return [spaces[k] for k in names]
 
@@ -275,48 +272,6 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
             Param('rise_s', length / 4000, length / 20),
             replace(t0, init=start)]))
     return replace(power_on, alternatives=tuple(others))
-
-
-def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
-                    lines: Sequence[float], levels: Sequence[float]) -> EffectSpace:
-    """
-    ``vibration``'s search: the tone at the strongest narrow peak; combs and tones if shown.
-
-    ``lines``, ``levels``: the record's narrow lines, strongest first, and their amplitudes
-    (``observables.narrow_lines``).
-    Where three or more sit on one lattice (``observables.comb_of``), a comb about the
-    strongest is an alternative start: lines at centre + k spacing under a Lorentzian
-    envelope whose width is fitted (a tone is its narrow limit). Where two or more lines
-    show, the three strongest as unrelated tones are another, each amplitude fitted within a
-    factor 2 of its line's measured amplitude (``levels``; a search from one tone at a time
-    crawls along the valley where their total power is right). Line frequencies and the
-    spacing, measured on the lines' peaks, are kept (``estimated``): the observables hardly
-    see a change within a bin, so a search would only trade them for noise.
-    """
-    amplitude = Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample)
-    freq = (Param('freq_hz', max(f_tone - 2.0 * df, df), f_tone + 2.0 * df, log=False)
-            if f_tone is not None else Param('freq_hz', 0.125 / dt, 0.375 / dt, log=False))
-    lines = np.asarray(lines, dtype=float)
-    others = []
-    comb = obs.comb_of(lines, df)
-    if comb is not None:
-        centre, spacing = comb
-        others.append(EffectSpace('vibration', [
-            amplitude, Param('freq_hz', max(centre - 0.5 * df, 0.5 * df), centre + 0.5 * df,
-                             log=False, init=centre),
-            Param('width_hz', 0.25 * spacing, 1.0 / dt)], fixed={'spacing_hz': spacing},
-            estimated=('spacing_hz',), passes=2))
-    if lines.size >= 2:
-        tones = lines[:3]
-        names = [('freq_hz', 'amplitude'), ('freq2_hz', 'amplitude2'), ('freq3_hz', 'amplitude3')]
-        lo, hi = 0.01 * sig_sample, 2.0 * sig_sample
-        start = np.clip(levels[:tones.size], lo, hi)
-        others.append(EffectSpace('vibration', [
-            Param(a, max(0.5 * v, lo), min(2.0 * v, hi), init=v)
-            for (_, a), v in zip(names, start.tolist())],
-            fixed={f: float(v) for (f, _), v in zip(names, tones)},
-            estimated=tuple(f for f, _ in names[:tones.size]), passes=2))
-    return EffectSpace('vibration', [amplitude, freq], alternatives=tuple(others))
 
 
 def checked_records(records: Sequence, dt: float, max_samples: Optional[int] = None):
