@@ -3,7 +3,8 @@
 # claim, and both harnesses reach them by --held-out j. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, flicker_band_psd, N_ARW, S_LINE, SIG, swing, W)
+                            fit, flicker_band_psd, fold_lines, N_ARW, noisy_run, S_LINE, SIG,
+                            swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
@@ -205,21 +206,6 @@ def test_anisoelastic_bias_is_a_square_law_on_the_linear_term():
     assert side == pytest.approx((1 + sa) / (1 - sa), rel=1e-3)   # one side larger
     assert np.linalg.norm(c[:4]) / S_LINE == pytest.approx(
         SWING.detectability('g_sensitivity', levels[1]), rel=0.02)
-
-
-def fold_lines(err, kmax=60):
-    """Norm of lines 2..kmax of ``err`` folded over the 5 s swing period (1 kHz samples)."""
-    m = 5000
-    mean = err[:err.size // m * m].reshape(-1, m).mean(axis=0)
-    return float(2 * np.linalg.norm(np.fft.rfft(mean)[2:kmax + 1] / m))
-
-
-def noisy_run(seed=13):
-    t = np.arange(900000) * 1e-3
-    rate = AMP * W * np.cos(W * t)
-    n_pre = S_LINE / np.sqrt(2 / 900.0)                                # the preset's N
-    return t, rate + n_pre * np.sqrt(1000.0) * np.random.default_rng(seed).standard_normal(
-        t.size)
 
 
 def test_dead_time_compresses_as_one_over_one_plus_rate_with_lines_as_computed():
