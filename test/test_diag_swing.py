@@ -3,7 +3,8 @@ from types import SimpleNamespace
 
 from gyro_char.diagnosis import (engine as diagnose, gap as diag_gap, swing as diag_swing,
                                  swing_obs as diag_swing_obs)
-from gyro_char.diagnosis.swing_spaces import unresolved_pairs
+from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.swing_spaces import signs, unresolved_pairs
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 from gyro_char.swing.filter import estimate_swing
@@ -202,3 +203,19 @@ def test_a_dead_band_is_not_read_as_gyro_noise_and_is_named():
     fitted = dict(diag.model)['scale_factor_nonlinearity']
     assert fitted['lock_in'] == pytest.approx(lock, rel=0.15)
     assert diag.final_gap < 0.3 * diag.baseline_gap
+
+
+def test_a_parameter_sign_comes_from_the_part_of_the_response_that_changes_sign():
+    # A cubic term moves the 3f line with its sign and the 2f block alike either way; a
+    # record with a large 2f departure (from elsewhere) and a negative 3f line (a compressive
+    # read-out) needs k3 < 0, which the whole response's projection got wrong.
+    def simulate(i, effects, seed):
+        k3 = dict(effects).get('scale_factor_nonlinearity', {}).get('k3', 0.0)
+        return {'quadrature': np.zeros(1), 'harmonic_2f': np.array([40.0 * abs(k3), 0.0]),
+                'harmonic_3f': np.array([10.0 * k3, 0.0])}
+    real = {'quadrature': np.zeros(1), 'harmonic_2f': np.array([0.7, 0.0]),
+            'harmonic_3f': np.array([-1.9, 0.0])}
+    space = EffectSpace('scale_factor_nonlinearity', [Param('k3', 1e-4, 1.0)])
+    assert signs([space], [real], simulate)[0].params[0].sign == -1.0
+    real['harmonic_3f'] *= -1.0
+    assert signs([space], [real], simulate)[0].params[0].sign == 1.0

@@ -79,10 +79,12 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
     """
     Give each signed parameter the sign that moves the twins towards the record.
 
-    A probe twin with the parameter at its range's geometric middle, against a baseline twin
-    of the same seed (common random numbers: the difference is the effect alone), gives the
-    effect's response on the harmonic blocks; its projection on the record's departure from
-    the baseline twin gives the sign. With several records (``simulate(record, effects, seed)``
+    Two probe twins with the parameter at plus and minus its range's geometric middle (common
+    random numbers) give the part of the effect's response on the harmonic blocks that
+    changes sign with it; its projection on the record's departure from a baseline twin of the
+    same seed gives the sign. The part that does not change sign (a cubic scale factor moves
+    the 2f block alike either way) says nothing of the sign and, projected, outweighed the
+    3f line of a compressive read-out. With several records (``simulate(record, effects, seed)``
     as in ``diagnose.Problem``) the departures of all of them are projected together.
     The encoder cyclic error's line count is started at the records' line (``with_lines``).
     """
@@ -97,9 +99,10 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
         params = []
         for p in sp.params:
             if p.name in SIGNED.get(sp.name, []):
-                fx = [(sp.name, {**sp.fixed, p.name: float(np.sqrt(p.lo * p.hi))})]
-                probe = [simulate(i, fx, 4242) for i in idx]
-                resp = np.concatenate([probe[i][b] - base[i][b] for i in idx for b in blocks])
+                mid = float(np.sqrt(p.lo * p.hi))
+                up, down = ([simulate(i, [(sp.name, {**sp.fixed, p.name: v})], 4242)
+                             for i in idx] for v in (mid, -mid))
+                resp = np.concatenate([up[i][b] - down[i][b] for i in idx for b in blocks])
                 sign = 1.0 if float(np.einsum('i,i->', resp, dev)) >= 0 else -1.0
                 p = replace(p, sign=sign)
             params.append(p)
