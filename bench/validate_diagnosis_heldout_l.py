@@ -64,12 +64,12 @@ def traffic(n: int, amplitude: float, dt: float, rng) -> np.ndarray:
     carrier = signal.sosfilt(sos, rng.standard_normal(n + 4096))[4096:] / rms
     span = int(5 * BURST_S / dt)
     t0 = rng.uniform(-span, n + span, rng.poisson((n + 2 * span) * dt / TRAFFIC_S))
-    env = np.zeros(n + 2 * span)
+    env = np.zeros(n + 4 * span + 1)
     k = np.arange(-span, span + 1)
     for c in t0:
-        at = int(np.floor(c)) + span
-        env[at - span:at + span + 1] += np.exp(-0.5 * ((k + at - span - c) * dt / BURST_S) ** 2)
-    return amplitude * env[span:span + n] * carrier
+        at = int(np.floor(c))
+        env[at + span:at + 3 * span + 1] += np.exp(-0.5 * ((k + at - c) * dt / BURST_S) ** 2)
+    return amplitude * env[2 * span:2 * span + n] * carrier
 
 
 def traffic_psd(f, amplitude: float, dt: float) -> np.ndarray:
