@@ -1,7 +1,71 @@
 """
 Held-out set L of static effect shapes: written blind, without running the diagnosis.
 
-DOCSTRING
+Same interface as ``validate_diagnosis_heldout_k.py`` (``shapes(dt, sig, n_arw)``, levels
+[weak, strong, edge of detectability on a 2 h record]); every shape is a physical form unlike
+the catalogue's, the development shapes (``validate_diagnosis.py``) and held-out sets A-K, and
+the kinds of departure differ from shape to shape:
+
+- internal_lowpass: dielectric absorption: the rate converter's integrating capacitor soaks a
+  fraction eps of each sample's charge into its dielectric and gives it back later through a
+  spread of relaxation times (1, 10, 100 and 1000 samples, equal shares): y = (1 - eps) x +
+  eps mean_i R_i(x), R_i a one-pole that releases from the next sample on; DC gain 1, a
+  spike at lag 0 on a long multi-exponential tail (memory over decades, not one time);
+- vibration: passing traffic: forklifts or trucks pass at Poisson times (one a minute on
+  average), each shaking the floor for a few seconds: the floor's band noise (12-30 Hz,
+  fourth-order Butterworth band-pass) under a Gaussian envelope of sd 2.5 s per pass, peak
+  rms A: non-stationary random vibration, silent most of the time (a Gaussian scale mixture);
+- temperature_drift: a duty-cycled transmitter: a telemetry radio on the same board sends for
+  30 s every 300 s, heating the die through its 60 s thermal lag: the periodic steady state
+  of a one-pole driven by a rectangular pulse train, A the shift continuous transmission would
+  give (the ripple spans 0.39 A), random phase: a deterministic exponential sawtooth;
+- bias_instability: one hopping trap: a single bistable defect whose barrier is re-drawn at
+  every hop from an exponential (Boltzmann-like) distribution, so its dwell times have density
+  ~ tau^-2 on 0.02 s-2e4 s; the bias is +-b, started from the stationary law (first dwell
+  length-biased, log-uniform): two levels only, yet a 1/f spectrum from 1e-4 to ~5 Hz;
+- rate_random_walk: slip avalanches: Gaussian slips of the die attach whose times form a
+  self-exciting (Hawkes) process, each slip triggering 0.8 further slips on average after an
+  exponential delay of 3 s (0.1 slips a second overall): a walk whose steps come in clusters
+  (count Fano factor up to 1 / (1 - 0.8)^2 = 25) yet with uncorrelated increments;
+- gauss_markov: a Pearson diffusion: X' = c X + sqrt((1 - c^2)(alpha + beta X^2)) xi, c =
+  exp(-dt / tc), beta = 1/8: the agitation grows with the excursion (state-dependent noise,
+  convective heat transfer that rises with the temperature difference); the linear drift keeps
+  the autocorrelation exactly exp(-|tau| / tc), the multiplicative noise gives power-law tails
+  (kurtosis 4.2);
+- quantization: alternating counters: the host reads, on alternate samples, two fringe
+  counters whose detectors sit half a step apart, read = Q floor((theta - o_k) / Q) + o_k,
+  o_k = 0, Q / 2, 0, ...: a periodically time-varying quantizer, its angle error correlated
+  with alternating sign at odd lags once the step exceeds the angle's walk per sample;
+- resonance: a clamp that chatters: a mount mode whose fixing clamp opens and closes at Poisson
+  times (mean 45 s each way), so its frequency switches between 31 Hz (open, q 25) and 36.5 Hz
+  (closed, same damping rate) with its state carried over: one line at a time, two lines on
+  average (regime switching, non-stationary).
+
+Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T = n dt, 2 h):
+
+- dielectric absorption: the autocorrelations r_j of the kernel h against their white spread
+  1 / sqrt(n), all lags together: z = sqrt(n sum_j r_j^2) (lag 1 alone for one-lag kernels);
+- traffic, clamp: mean excess PSD / white over the band above half its peak, times sqrt(T B)
+  (as sets H-K): traffic E[env^2] 2 dt |H|^2 / rms^2, E[env^2] = A^2 (lam s sqrt(pi) + (lam s
+  sqrt(2 pi))^2) (Campbell); the clamp the two modes' PSDs, half each;
+- transmitter: matched to its own noise-free waveform, mean removed: |s - mean(s)| / sigma;
+- hopping trap, avalanches, Pearson: Allan variance excess over N^2 / tau in units of the white
+  spread N^2 / tau sqrt(2 / edf), edf = 1.5 T / tau, best tau in [10 dt, T / 10]: the trap
+  from the alternating-renewal PSD 8 b^2 / (mu w^2) Re[(1 - psi) / (1 + psi)] (psi the dwell
+  law's transform by sine and cosine integrals, mu its mean), the avalanches q^2 (2 m^2 + 1) /
+  (6 m), q^2 = K^2 dt (exact: independent zero-mean slips, whatever their timing), the
+  diffusion the first-order Gauss-Markov formula;
+- alternating counters: the angle error's autocovariance c(m) = 2 sum_h (Q / 2 pi h)^2 (-1)^(h
+  m) cos(2 pi h b m dt / Q) exp(-2 pi^2 h^2 m dt N^2 / Q^2) (the angle walking by the white
+  noise and drifting with the records' bias b = 0.003 rad/s): relative Allan excess (3 c0 - 4
+  c_m + c_2m) / (m dt N^2) at dt less at 10 dt, against sqrt(3 / n + 40 / (3 n)).
+Edges are set at z ~ 4; weak and strong are several to hundreds of times further in z.
+Physical scale: absorbed fractions of 2.1 % (edge), 12 % and 40 %; passes of 0.094, 0.34 and
+1.15 deg/s peak rms; transmitter shifts of 0.017, 0.086 and 0.29 deg/s (1.3-21 degC at 0.0135
+(deg/s)/degC, ripples 0.39 of that); traps of +-21, 82 and 206 deg/h; avalanche walks of K
+2e-6, 6e-6 and 2e-5 rad/s/sqrt(s); diffusions of 0.0078, 0.057 and 0.115 deg/s sd (tc 5 s,
+5 s and 40 s); counter steps of 4.2, 43 and 115 arcsec; chattering modes of 0.022, 0.11 and
+0.34 deg/s sd.
 """
 from heldout_detect import band_excess, gm_avar, psd_avar
 import numpy as np

@@ -1,7 +1,58 @@
 """
 Held-out swing set L: written blind, without running the diagnosis, run once at the end.
 
-DOCSTRING
+Same interface as ``validate_diagnosis_swing_heldout_k.py``: ``shapes(rate_hz)`` gives
+``{name: (fn, [weak, strong, edge])}``, ``fn(imu_t, gyro, enc_t, enc_angle, stand, rng,
+**params) -> (imu_t, gyro, enc_t, enc_angle)``, ``stand(t)`` the true (angle, rate). Each shape
+is unlike the catalogue's, the development harness's and sets B-K, and the kinds of departure
+differ from shape to shape:
+
+- time_delay: an over-eager predictor: the IMU firmware extrapolates every rate value ``lead``
+  ahead from its slope over the last 10 samples, x_k + lead (x_k - x_(k-10)) / (10 dt), to
+  hide a latency the host already removes: the gyro LEADS the motion (a negative delay), and
+  its fast noise is lifted ((1 + q)^2 + q^2 in variance, q = lead / 10 dt), DC gain 1;
+- g_sensitivity: a preloaded suspension: the proof mass rests against a spring preloaded to
+  1.2 m/s^2 and only deflects beyond it, bias g_y sign(f_y) max(|f_y| - 1.2 m/s^2, 0), f_y =
+  g sin(phi): a dead zone, none at small tilts, odd lines of the swing;
+- scale_factor_nonlinearity: a two-range blend: the IMU crossfades (smoothstep) from its
+  low-range channel to a high-range one as the low-range reading's magnitude goes from 0.15 to
+  0.30 rad/s; the high-range channel's gain is off by ``gain`` and it carries its own white
+  noise (as large as the gyro's): a gain change and a noise change with the rate, the weight
+  set by the noisy reading;
+- scale_factor_asymmetry: push-pull bandwidth mismatch: the rebalance driver's two halves
+  settle tau slower and faster than the compensated mean, so the output is w - tau d|w|/dt
+  (the slope over the driver's 10-sample settling window, output value, noise included): no
+  static gain asymmetry at all, a 2f line in quadrature with that of a |w|;
+- timestamp_jitter: a host de-jitter filter: the encoder samples arrive with exponential
+  latencies (mean m) and the host stamps each with the mean latency of the last 32 arrivals:
+  what is left is a running mean, Gaussian-like, skew 2 / sqrt(32), triangular
+  autocorrelation over 32 ms, variance m^2 / 32;
+- encoder_cyclic_error: a warming read head: the head's LED warms after power-on and the sine
+  track's DC offset grows as o (1 - e^(-t / 240 s)) (of the track amplitude), so the atan2
+  interpolation errs by up to asin(o) / L (L = 1800 lines) at the line period: a cyclic error
+  whose size grows through the run (each run starting at power-on).
+
+Levels (``detectability``; 15 min, 1 kHz gyro and encoder, adis16405 preset: A = 20 deg, the
+5 s period, N its gyro's ARW; s = N sqrt(2 / T) the sd of a fitted rate-residual sine):
+
+- preload: the harmonics k = 1..60 of the bias along the swing, in quadrature, against s;
+- blend, push-pull: the lines k >= 2 of the rate error at A w cos(wt), in quadrature, against
+  s: the blend gain w E[s(|w + n|)] (Gauss-Hermite over the gyro's own noise; its extra noise
+  has no mean), the mismatch -tau times the 10-sample slope of E|w + n| line by line;
+- predictor, warming head: matched detector on the noise-free angle residual (the integrated
+  rate error of the predicted motion; the head's error with offset and scale fitted out)
+  against the gyro angle noise N^2 / (2 pi f)^2, the encoder's white floor and the preset's
+  stamp jitter;
+- de-jitter: a quadratic detector on the angle error -phi_dot e(t), e of two-sided PSD m^2 /
+  f_s |D_32(f)|^2 (the running mean's response), shifted by +-1 / 5 s, z = sqrt(T / 2 int
+  (S_r / S_n)^2 df) (as sets E and K).
+Edges are at z ~ 4 at the 5 s period; weak and strong are several to hundreds of times
+further in z. Physical scale: leads of 0.19 (edge), 1 and 4 ms; g_y of 5.4e-5, 3e-4 and 1e-3
+rad/s/(m/s^2) beyond a 0.12 g preload (0.030-0.56 deg/s/g); high-range gain errors of 0.11 %,
+1 % and 4 % (crossfade 8.6-17.2 deg/s against the swing's 25.1 deg/s peak); driver
+mismatches of 0.19, 2 and 6 ms; mean latencies of 93, 300 and 800 us (residual sd 16, 53 and
+141 us); LED offsets of 0.044 %, 0.3 % and 1 % of the track (0.05, 0.34 and 1.15 arcsec peak
+on the 720 arcsec pitch).
 """
 from gyro_char.sim.config import BenchConfig
 from heldout_detect import matched_z, noise_mean
