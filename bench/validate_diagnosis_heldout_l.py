@@ -117,9 +117,8 @@ def floor_band(dt: float):
 
 def envelope_power(amplitude: float) -> float:
     """E[env^2] of Gaussian envelopes (sd BURST_S, peak ``amplitude``) at Poisson times."""
-    lam = 1 / TRAFFIC_S
-    return amplitude ** 2 * (lam * BURST_S * np.sqrt(np.pi) + (lam * BURST_S
-                                                                * np.sqrt(2 * np.pi)) ** 2)
+    mean = BURST_S / TRAFFIC_S
+    return amplitude ** 2 * (mean * np.sqrt(np.pi) + (mean * np.sqrt(2 * np.pi)) ** 2)
 
 
 def traffic(n: int, amplitude: float, dt: float, rng) -> np.ndarray:
@@ -207,7 +206,7 @@ def avalanche(n: int, k: float, dt: float, rng) -> np.ndarray:
 
 
 def pearson(n: int, sd: float, tc: float, dt: float, rng) -> np.ndarray:
-    """Return X' = c X + sqrt((1 - c^2)(alpha + beta X^2)) xi: exponential correlation, fat tails."""
+    """Return X' = c X + sqrt((1 - c^2)(alpha + beta X^2)) xi: exponential correlation."""
     c = np.exp(-dt / tc)
     alpha, g = sd * sd * (1 - PEARSON), np.sqrt(1 - c * c)
     burn = int(5 * tc / dt)
@@ -250,7 +249,7 @@ def clamp_coeffs(state: int, dt: float):
 
 
 def clamp_mode(n: int, sigma: float, dt: float, rng) -> np.ndarray:
-    """A unit-variance mode whose frequency toggles at Poisson times, its state carried over."""
+    """Return a mode whose frequency toggles at Poisson times, its state carried over."""
     burn = int(2.0 / dt)
     out, prev, state, at = np.zeros(n + burn), [0.0, 0.0], int(rng.integers(2)), 0
     while at < n + burn:

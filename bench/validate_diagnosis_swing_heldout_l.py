@@ -68,7 +68,7 @@ LED_S = 240.0                           # s: the read head's LED warm-up
 
 
 def predictor(x: np.ndarray, lead: float, rate_hz: float) -> np.ndarray:
-    """x_k + lead (x_k - x_(k-M)) / (M dt): extrapolated ``lead`` s ahead (x held before 0)."""
+    """Return x_k + lead (x_k - x_(k-M)) / (M dt): ``lead`` s ahead (x held before 0)."""
     m = SLOPE_SAMPLES
     past = np.r_[np.full(m, x[0]), x[:-m]]
     return x + lead * (x - past) * rate_hz / m
@@ -93,7 +93,7 @@ def blend_mean_error(w, gain: float, s_n: float) -> np.ndarray:
 
 
 def push_pull(x: np.ndarray, tau: float, rate_hz: float) -> np.ndarray:
-    """x - tau d|x|/dt, the slope over the driver's SLOPE_SAMPLES settling window."""
+    """Return x - tau d|x|/dt, the slope over the driver's SLOPE_SAMPLES settling window."""
     m, mag = SLOPE_SAMPLES, np.abs(x)
     return x - tau * (mag - np.r_[np.full(m, mag[0]), mag[:-m]]) * rate_hz / m
 
