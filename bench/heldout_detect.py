@@ -81,3 +81,26 @@ def noise_lines(err, amp_rate: float, s_n: float) -> float:
     th = np.arange(4096) * 2 * np.pi / 4096
     c = np.fft.rfft(noise_mean(err, amp_rate * np.cos(th), s_n)) / th.size
     return float(2 * np.linalg.norm(c[2:61]))
+
+
+def encoder_floor(enc, rate_hz: float, amp_rate: float = 0.0) -> float:
+    """
+    White floor (two-sided, per Hz) of the encoder angle on a run at ``rate_hz``.
+
+    The ADC noise and the level and word steps; with ``amp_rate``, the preset's stamp jitter
+    read through the swing's rms rate as well.
+    """
+    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    return floor + (amp_rate ** 2 / 2 * enc.jitter_s ** 2 / rate_hz if amp_rate else 0.0)
+
+
+def quadratic_z(s_r: np.ndarray, f: np.ndarray, n_arw: float, floor: float,
+                duration: float) -> float:
+    """
+    Return the z of a quadratic detector for an added two-sided angle-noise PSD ``s_r``.
+
+    Against the gyro's angle noise n_arw^2 / (2 pi f)^2 plus the white ``floor``:
+    sqrt(T / 2 int (S_r / S_n)^2 df).
+    """
+    s_n = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
+    return float(np.sqrt(duration / 2 * np.trapezoid((s_r / s_n) ** 2, f)))

@@ -42,6 +42,7 @@ swing); weak and strong are 4-50x further in z, the latency's 450-4000x (its z g
 the variance; weak is a typical 63 us sd).
 """
 from gyro_char.sim.config import BenchConfig
+from heldout_detect import encoder_floor, quadratic_z
 import numpy as np
 from scipy import signal, special
 
@@ -134,7 +135,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return abs(p['e'] * harmonic(lambda r: r * (np.abs(r) > RANGE_SWITCH), amp * w, 3)) / s
     if name == 'scale_factor_asymmetry':
         return abs(p['a'] * harmonic(lambda r: np.abs(r - COMPARATOR), amp * w, 2)) / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    floor = encoder_floor(enc, rate_hz)
     if name == 'encoder_cyclic_error':
         th = np.arange(100000) * 2 * np.pi / 100000
         rate = np.abs(amp * w * np.cos(th))
@@ -147,6 +148,4 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return float(np.sqrt(z2))
     f = np.linspace(-rate_hz / 2, rate_hz / 2, 200001)
     s_r = (amp * w) ** 2 / 2 * latency_moments(p['mean_s'])[1] / rate_hz
-    s_n = (n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-           + (amp * w) ** 2 / 2 * enc.jitter_s ** 2 / rate_hz)
-    return float(np.sqrt(duration / 2 * np.trapezoid((s_r / s_n) ** 2, f)))
+    return quadratic_z(s_r, f, n_arw, encoder_floor(enc, rate_hz, amp * w), duration)

@@ -47,7 +47,7 @@ hysteresis 1x, lock-in 0.5x: the swing spends less time in its dead band); weak 
 strong disk error (eccentricity 3 mrad) is a magnetic or low-grade optical encoder's.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import matched_z
+from heldout_detect import encoder_floor, matched_z
 import numpy as np
 from scipy import signal
 
@@ -162,8 +162,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return p['a'] * lines(lambda r, th: r * schmitt(r, SCHMITT), amp * w, 2) / s
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12
-             + (amp * w) ** 2 / 2 * enc.jitter_s ** 2) / rate_hz
+    floor = encoder_floor(enc, rate_hz, amp * w)
     if name == 'timestamp_jitter':
         residual = -rate * sawtooth(np.arange(t.size), 1.0 / rate_hz, p['delta'])
     else:

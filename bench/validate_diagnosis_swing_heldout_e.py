@@ -59,7 +59,7 @@ hard), the weak 0.6 %; packet latencies uniform in +-60 us (a USB high-speed mic
 from functools import lru_cache
 
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import matched_z
+from heldout_detect import encoder_floor, matched_z, quadratic_z
 import numpy as np
 from scipy import signal
 
@@ -176,7 +176,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
     if name == 'scale_factor_asymmetry':
         return lines(lambda r, dt: p['a'] * r * lag(np.sign(r), MAG_TAU, dt), amp * w, 2,
                      period_s) / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    floor = encoder_floor(enc, rate_hz)
     if name == 'encoder_cyclic_error':
         t = np.arange(int(duration * rate_hz)) / rate_hz
         phi = amp * np.sin(w * t)
@@ -187,6 +187,4 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
     f = np.linspace(-rate_hz / 2, rate_hz / 2, 200001)
     hold = PACKET / rate_hz
     s_r = (amp * w) ** 2 / 2 * p['h'] ** 2 / 3 * hold * np.sinc(f * hold) ** 2
-    s_n = (n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-           + (amp * w) ** 2 / 2 * enc.jitter_s ** 2 / rate_hz)
-    return float(np.sqrt(duration / 2 * np.trapezoid((s_r / s_n) ** 2, f)))
+    return quadratic_z(s_r, f, n_arw, encoder_floor(enc, rate_hz, amp * w), duration)

@@ -67,7 +67,7 @@ settled asymmetries 0.03-0.6 %; character times of 1.8 Mbaud (edge), 460.8 kbaud
 115.2 kbaud (strong) links; spot depths 0.18 %, 1.5 %, 8 %.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import fourier, matched_z
+from heldout_detect import encoder_floor, fourier, matched_z
 import numpy as np
 from scipy import special
 
@@ -182,7 +182,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
     if name == 'scale_factor_asymmetry':
         mean = 1 + WARM_EXCESS * WARM_TAU / duration * (1 - np.exp(-duration / WARM_TAU))
         return p['a'] * mean * 4 * amp * w / (3 * np.pi) / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    floor = encoder_floor(enc, rate_hz)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi = amp * np.sin(w * t)
     if name == 'encoder_cyclic_error':

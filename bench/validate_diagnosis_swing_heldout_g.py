@@ -59,7 +59,7 @@ anomalies of 0.022, 0.11 and 0.34 deg/s; asymmetries of 0.11 %, 0.4 % and 1 %; b
 of 0.25, 1 and 4 us; track skews of 0.52, 2.5 and 10 us (a multiplexed converter's).
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import fourier, matched_z, noise_mean
+from heldout_detect import encoder_floor, fourier, matched_z, noise_mean
 import numpy as np
 
 G0 = 9.80665
@@ -161,7 +161,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return float(2 * np.linalg.norm(c[2:61]) / s)
     if name == 'scale_factor_asymmetry':
         return p['a'] * 0.5 * 4 * amp * w / (3 * np.pi) / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    floor = encoder_floor(enc, rate_hz)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':

@@ -45,7 +45,7 @@ dead-band offsets of 0.011, 0.034 and 0.11 deg/s; square-law terms b of 1.1e-3, 
 head tilts of 0.39, 2 and 6 mrad of line phase between the tracks.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import fourier, matched_z, noise_mean
+from heldout_detect import encoder_floor, fourier, matched_z, noise_mean
 import numpy as np
 
 G0 = 9.80665
@@ -131,7 +131,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return float(2 * np.linalg.norm(c[2:61]) / s)
     if name == 'scale_factor_asymmetry':
         return p['b'] * (amp * w) ** 2 / 2 / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    floor = encoder_floor(enc, rate_hz)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':

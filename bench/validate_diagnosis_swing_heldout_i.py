@@ -50,7 +50,7 @@ z. Physical scale: delays of 0.188 (edge), 1 and 3 ms; g_y (settled) of 2.1e-5, 
 of 4.7e-4, 3e-3 and 1e-2 of the track amplitude.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import matched_z, noise_lines
+from heldout_detect import encoder_floor, matched_z, noise_lines
 import numpy as np
 from scipy import signal, special
 
@@ -143,7 +143,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return noise_lines(lambda v: np.clip(v, -fs, fs) - v, amp * w, s_n) / s
     if name == 'scale_factor_asymmetry':
         return noise_lines(lambda v: late_onset(v, p['a']), amp * w, s_n) / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    floor = encoder_floor(enc, rate_hz)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':

@@ -54,7 +54,7 @@ deg/s/g, the same per g^2); dead-time scales W of 315, 20 and 6 rad/s (compressi
 at a 50 mm radius).
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import fourier, matched_z, noise_lines
+from heldout_detect import encoder_floor, fourier, matched_z, noise_lines
 import numpy as np
 from scipy import signal
 
@@ -160,7 +160,7 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return noise_lines(lambda v: dead_time(v, p['scale']) - v, amp * w, s_n) / s
     if name == 'scale_factor_asymmetry':
         return noise_lines(lambda v: p['a'] * np.abs(v), amp * w, s_n) / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
+    floor = encoder_floor(enc, rate_hz)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':

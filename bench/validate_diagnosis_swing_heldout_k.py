@@ -52,7 +52,7 @@ front-end ranges of 42, 39 and 32 deg/s (quadrature 34, 31, 25 deg/s; onsets 25.
 and 0.04; busy spreads of 29, 150 and 400 us; disk errors of 2.8, 12 and 40 arcsec rms.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import matched_z, noise_lines
+from heldout_detect import encoder_floor, matched_z, noise_lines, quadratic_z
 import numpy as np
 from scipy import signal
 from validate_diagnosis_heldout_k import two_state
@@ -193,15 +193,13 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return noise_lines(lambda v: carrier_clip(v, p['full']) - v, amp * w, s_n) / s
     if name == 'scale_factor_asymmetry':
         return noise_lines(lambda v: p['a'] * np.abs(v), amp * w, s_n) / s
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
-    floor += (amp * w) ** 2 / 2 * enc.jitter_s ** 2 / rate_hz
+    floor = encoder_floor(enc, rate_hz, amp * w)
     if name == 'timestamp_jitter':
         f = np.linspace(-rate_hz / 2, rate_hz / 2, 400001)
         f0 = w / (2 * np.pi)
         s_r = (amp * w) ** 2 / 4 * (bursty_psd(f - f0, p['busy'], rate_hz)
                                     + bursty_psd(f + f0, p['busy'], rate_hz))
-        s_g = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-        return float(np.sqrt(duration / 2 * np.trapezoid((s_r / s_g) ** 2, f)))
+        return quadratic_z(s_r, f, n_arw, floor, duration)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':

@@ -55,7 +55,7 @@ mismatches of 0.19, 2 and 6 ms; mean latencies of 93, 300 and 800 us (residual s
 on the 720 arcsec pitch).
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import matched_z, noise_mean
+from heldout_detect import encoder_floor, matched_z, noise_mean, quadratic_z
 import numpy as np
 
 G0 = 9.80665
@@ -181,15 +181,13 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
             diff = (1 - np.exp(-1j * k * w * m / rate_hz)) * rate_hz / m
             err = -p['tau'] * diff * np.fft.rfft(noise_mean(np.abs, rate, s_n)) / th.size
         return float(2 * np.linalg.norm(err[2:61]) / s)
-    floor = (enc.adc_noise ** 2 + enc.level_step ** 2 / 12 + enc.word_step ** 2 / 12) / rate_hz
-    floor += (amp * w) ** 2 / 2 * enc.jitter_s ** 2 / rate_hz
+    floor = encoder_floor(enc, rate_hz, amp * w)
     if name == 'timestamp_jitter':
         f = np.linspace(-rate_hz / 2, rate_hz / 2, 400001)
         f0 = w / (2 * np.pi)
         s_r = (amp * w) ** 2 / 4 * (dejitter_psd(f - f0, p['mean'], rate_hz)
                                     + dejitter_psd(f + f0, p['mean'], rate_hz))
-        s_g = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
-        return float(np.sqrt(duration / 2 * np.trapezoid((s_r / s_g) ** 2, f)))
+        return quadratic_z(s_r, f, n_arw, floor, duration)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':
