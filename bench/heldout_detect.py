@@ -104,3 +104,17 @@ def quadratic_z(s_r: np.ndarray, f: np.ndarray, n_arw: float, floor: float,
     """
     s_n = n_arw ** 2 / np.maximum((2 * np.pi * f) ** 2, 1e-30) + floor
     return float(np.sqrt(duration / 2 * np.trapezoid((s_r / s_n) ** 2, f)))
+
+
+def stamp_z(stamp_psd, amp_rate: float, f0: float, n_arw: float, floor: float,
+            duration: float, rate_hz: float, points: int) -> float:
+    """
+    Return the z of a stamp error of two-sided PSD ``stamp_psd(f)`` (s^2/Hz) on a swing run.
+
+    Read through the swing's rate amp_rate cos(2 pi f0 t), the error adds angle noise
+    amp_rate^2 / 4 (S(f - f0) + S(f + f0)), detected by ``quadratic_z`` on ``points``
+    frequencies across the run's band.
+    """
+    f = np.linspace(-rate_hz / 2, rate_hz / 2, points)
+    s_r = amp_rate ** 2 / 4 * (stamp_psd(f - f0) + stamp_psd(f + f0))
+    return quadratic_z(s_r, f, n_arw, floor, duration)

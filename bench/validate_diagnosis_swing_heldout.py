@@ -36,7 +36,7 @@ Edges are at z ~ 4; weak and strong are 5-50x further.
 """
 from gyro_char.sim.config import BenchConfig
 from gyro_char.sim.effects.sensor import second_order_gm
-from heldout_detect import encoder_floor, quadratic_z
+from heldout_detect import encoder_floor, stamp_z
 import numpy as np
 from scipy import signal, special
 
@@ -116,10 +116,8 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         big_a = p['a2'] ** 2 * (2 * LINES) ** 2 + (p['a2'] / 2) ** 2 * (4 * LINES) ** 2
         return float(np.sqrt(big_a * duration * (amp * w) ** 2 / (4 * n_arw ** 2)))
     enc = cfg.encoder
-    floor = encoder_floor(enc, rate_hz)
-    f = np.linspace(-rate_hz / 2, rate_hz / 2, 2000001)
 
     def s_e(x):
         return 4 * p['sigma_s'] ** 2 * JITTER_TC / (1 + (2 * np.pi * x * JITTER_TC) ** 2) ** 2
-    s_r = (amp * w) ** 2 / 4 * (s_e(f - 1 / period_s) + s_e(f + 1 / period_s))
-    return quadratic_z(s_r, f, n_arw, floor, duration)
+    return stamp_z(s_e, amp * w, 1 / period_s, n_arw, encoder_floor(enc, rate_hz), duration,
+                   rate_hz, 2000001)

@@ -52,7 +52,7 @@ front-end ranges of 42, 39 and 32 deg/s (quadrature 34, 31, 25 deg/s; onsets 25.
 and 0.04; busy spreads of 29, 150 and 400 us; disk errors of 2.8, 12 and 40 arcsec rms.
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z, noise_lines, quadratic_z
+from heldout_detect import encoder_floor, matched_z, noise_lines, stamp_z
 import numpy as np
 from scipy import signal
 from validate_diagnosis_heldout_k import two_state
@@ -195,11 +195,8 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return noise_lines(lambda v: p['a'] * np.abs(v), amp * w, s_n) / s
     floor = encoder_floor(enc, rate_hz, amp * w)
     if name == 'timestamp_jitter':
-        f = np.linspace(-rate_hz / 2, rate_hz / 2, 400001)
-        f0 = w / (2 * np.pi)
-        s_r = (amp * w) ** 2 / 4 * (bursty_psd(f - f0, p['busy'], rate_hz)
-                                    + bursty_psd(f + f0, p['busy'], rate_hz))
-        return quadratic_z(s_r, f, n_arw, floor, duration)
+        return stamp_z(lambda f: bursty_psd(f, p['busy'], rate_hz), amp * w, w / (2 * np.pi),
+                       n_arw, floor, duration, rate_hz, 400001)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':

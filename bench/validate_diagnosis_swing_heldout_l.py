@@ -55,7 +55,7 @@ mismatches of 0.19, 2 and 6 ms; mean latencies of 93, 300 and 800 us (residual s
 on the 720 arcsec pitch).
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z, noise_mean, quadratic_z
+from heldout_detect import encoder_floor, matched_z, noise_mean, stamp_z
 import numpy as np
 
 G0 = 9.80665
@@ -183,11 +183,8 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         return float(2 * np.linalg.norm(err[2:61]) / s)
     floor = encoder_floor(enc, rate_hz, amp * w)
     if name == 'timestamp_jitter':
-        f = np.linspace(-rate_hz / 2, rate_hz / 2, 400001)
-        f0 = w / (2 * np.pi)
-        s_r = (amp * w) ** 2 / 4 * (dejitter_psd(f - f0, p['mean'], rate_hz)
-                                    + dejitter_psd(f + f0, p['mean'], rate_hz))
-        return quadratic_z(s_r, f, n_arw, floor, duration)
+        return stamp_z(lambda f: dejitter_psd(f, p['mean'], rate_hz), amp * w, w / (2 * np.pi),
+                       n_arw, floor, duration, rate_hz, 400001)
     t = np.arange(int(duration * rate_hz)) / rate_hz
     phi, rate = amp * np.sin(w * t), amp * w * np.cos(w * t)
     if name == 'time_delay':
