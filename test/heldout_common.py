@@ -41,6 +41,12 @@ def flicker_band_psd(fn, b=1.0):
     return ys, f, p.mean(axis=0), (f >= 0.05) & (f <= 5.0)
 
 
+def octave_ratios(f, pxx, band, want):
+    """Measured over exact PSD, averaged in each of the seven octaves of the 0.05-5 Hz band."""
+    octave = np.floor(np.log2(f[band] / 0.05))
+    return [np.mean(pxx[band][octave == k]) / np.mean(want[octave == k]) for k in range(7)]
+
+
 def stand(t):
     return AMP * np.sin(W * t), AMP * W * np.cos(W * t)
 

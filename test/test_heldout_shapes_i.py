@@ -2,8 +2,8 @@
 # bench/validate_diagnosis_swing_heldout_i.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out i. THE GENERATORS only, never the diagnosis.
 import bench_script
-from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, flicker_band_psd, N_ARW, S_LINE, SIG, swing, W)
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
+                            flicker_band_psd, N_ARW, octave_ratios, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
@@ -78,8 +78,7 @@ def test_diffusion_flicker_has_the_modes_psd_one_over_f_in_band_flat_below():
     fn, _ = SHAPES['bias_instability']
     ys, f, pxx, band = flicker_band_psd(fn)
     want = STATIC.slab_psd(f[band], 1.0, DT)
-    octave = np.floor(np.log2(f[band] / 0.05))                        # 0.05-5 Hz in octaves
-    ratio = [np.mean(pxx[band][octave == k]) / np.mean(want[octave == k]) for k in range(7)]
+    ratio = octave_ratios(f, pxx, band, want)
     assert np.allclose(ratio, 1.0, atol=0.2), ratio
     assert np.mean(pxx[band] / want) == pytest.approx(1.0, abs=0.06)
     g = np.geomspace(1e-3, 3.0, 20)
