@@ -210,7 +210,7 @@ def main(argv=None) -> int:
                     help='magnitude levels (0 weak, 1 strong, 2 edge of detectability)')
     ap.add_argument('--method', choices=('closed-form', 'twins'), default='closed-form')
     ap.add_argument('--held-out', nargs='?', const='a',
-                    choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l'),
+                    choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm'),
                     default=None,
                     help='a held-out shape set, no pairs: a = validate_diagnosis_heldout.py '
                          '(used once in session 3), b = validate_diagnosis_heldout_b.py, '
@@ -223,7 +223,8 @@ def main(argv=None) -> int:
                          'i = validate_diagnosis_heldout_i.py, '
                          'j = validate_diagnosis_heldout_j.py, '
                          'k = validate_diagnosis_heldout_k.py, '
-                         'l = validate_diagnosis_heldout_l.py')
+                         'l = validate_diagnosis_heldout_l.py, '
+                         'm = validate_diagnosis_heldout_m.py')
     ap.add_argument('--only', nargs='+', default=None, metavar='NAME',
                     help='only these shapes (and no pairs, no clean records)')
     ap.add_argument('--repeats', type=int, default=6)
@@ -245,7 +246,8 @@ def main(argv=None) -> int:
                                                  'd': '_d', 'e': '_e', 'f': '_f',
                                                  'g': '_g', 'h': '_h',
                                                  'i': '_i', 'j': '_j',
-                                                 'k': '_k', 'l': '_l'}[args.held_out]
+                                                 'k': '_k', 'l': '_l',
+                                                 'm': '_m'}[args.held_out]
         shapes = importlib.import_module(module).shapes(DT, SIG, N_ARW)
     todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out)
     if args.only:
