@@ -160,6 +160,10 @@ PAIRS = [(('vibration', 0), ('internal_lowpass', 0)),
          (('vibration', 1), ('bias_instability', 1))]
 
 
+# Seeds of the extra clean records (``--clean``), apart from the shape seeds.
+CLEAN_SEED0 = 1000
+
+
 def make_record(effects, n, seed, shapes=None):
     shapes = shapes or SHAPES
     rng = np.random.default_rng(seed)
@@ -181,7 +185,7 @@ def run_case(effects, n, seed, repeats, method='closed-form', shapes=None):
     return d
 
 
-def cases(quick: bool, seeds, levels=(0, 1), shapes=None, pairs=True):
+def cases(quick: bool, seeds, levels=(0, 1), shapes=None, pairs=True, clean_extra=0):
     if quick:
         yield 'clean', [], seeds[0]
         yield 'vibration', [('vibration', 1)], seeds[0]
@@ -189,6 +193,8 @@ def cases(quick: bool, seeds, levels=(0, 1), shapes=None, pairs=True):
         return
     for s in seeds:
         yield 'clean', [], s
+    for k in range(clean_extra):
+        yield 'clean', [], CLEAN_SEED0 + k
     for name in shapes or SHAPES:
         for level in levels:
             for s in seeds:
@@ -209,6 +215,9 @@ def main(argv=None) -> int:
     ap.add_argument('--levels', type=int, nargs='+', default=[0, 1],
                     help='magnitude levels (0 weak, 1 strong, 2 edge of detectability)')
     ap.add_argument('--method', choices=('closed-form', 'twins'), default='closed-form')
+    ap.add_argument('--clean', type=int, default=0, metavar='K',
+                    help=f'K more clean records, seeds {CLEAN_SEED0}.. (the clean record of a '
+                         'seed is the same in every shape set: false alarms need many)')
     ap.add_argument('--held-out', nargs='?', const='a',
                     choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm'),
                     default=None,
@@ -227,7 +236,9 @@ def main(argv=None) -> int:
                          'm = validate_diagnosis_heldout_m.py')
     ap.add_argument('--only', nargs='+', default=None, metavar='NAME',
                     help='only these shapes (and no pairs, no clean records)')
-    ap.add_argument('--repeats', type=int, default=6)
+    ap.add_argument('--repeats', type=int, default=None,
+                    help='twins per model (default: 32 of the baseline on closed forms, 6 '
+                         'per model with --method twins)')
     ap.add_argument('--seeds', type=int, nargs='+', default=[11, 12])
     args, rest = ap.parse_known_args(argv)
     if args.swing:
@@ -238,6 +249,7 @@ def main(argv=None) -> int:
         ap.error(f'unrecognized arguments: {" ".join(rest)}')
     rows = []
     t0 = time.time()
+    repeats = args.repeats or (static_expect.NULL_TWINS if args.method != 'twins' else 6)
     n = int(round(args.duration / DT)) if args.duration else args.samples
     shapes = SHAPES
     if args.held_out:
@@ -249,11 +261,12 @@ def main(argv=None) -> int:
                                                  'k': '_k', 'l': '_l',
                                                  'm': '_m'}[args.held_out]
         shapes = importlib.import_module(module).shapes(DT, SIG, N_ARW)
-    todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out)
+    todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out,
+                 clean_extra=args.clean)
     if args.only:
         todo = [c for c in todo if len(c[1]) == 1 and c[1][0][0] in args.only]
     for label, effects, seed in todo:
-        d = run_case(effects, n, seed, args.repeats, args.method, shapes)
+        d = run_case(effects, n, seed, repeats, args.method, shapes)
         truth = [LABELS.get(e, e) for e, _ in effects]
         detected = d.baseline_gap > d.null_gap['q95']
         top1 = d.ranking[0]['effect']

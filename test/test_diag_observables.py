@@ -69,6 +69,30 @@ def test_drift_block_sees_a_warm_up_but_not_a_line():
     assert warm[0] > 0.02
 
 
+def test_drift_windows_are_disjoint_shells_nearly_uncorrelated_on_white_noise():
+    # Nested windows (the first 1/64, 1/32, ... of the record) correlate up to 0.7 on white
+    # noise, so one chance excursion at the start moved the whole block (a clean record was
+    # named a warm-up); disjoint shells do not.
+    n = 2 ** 16
+    win = obs.drift_windows(n)
+    assert win[0][0] == 0 and win[-1][1] == n // 2
+    assert all(a[1] == b[0] for a, b in zip(win, win[1:]))
+    t = np.arange(n) - (n - 1) / 2.0
+    forms = []
+    for a, b in win:
+        c = np.zeros(n)
+        c[a:b] = 1.0 / (b - a)
+        c[n // 2:] -= 1.0 / (n - n // 2)
+        c -= c.mean()
+        forms.append(c - t * (t @ c) / (t @ t))         # the record minus its line
+    cov = np.array(forms) @ np.array(forms).T
+    corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
+    assert np.max(np.abs(corr - np.eye(len(win)))) < 0.4
+    x = np.random.default_rng(6).standard_normal(n)
+    x -= np.polyval(np.polyfit(np.arange(n), x, 1), np.arange(n))
+    assert np.allclose(obs.drift_means(x), np.array(forms) @ x, atol=1e-12)
+
+
 def test_output_step_and_baseline_fit_recover_truth():
     rng = np.random.default_rng(5)
     lsb = 0.05 * np.pi / 180

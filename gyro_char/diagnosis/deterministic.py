@@ -66,8 +66,7 @@ def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
     d1 = float(np.mean(np.diff(d) ** 2))
     r0 = float(np.dot(d, d)) / g.n
     acov = r0 - 0.5 * d1 * np.arange(lags + 1) ** 2
-    half = d[g.n // 2:].mean()
-    drift = np.array([d[:max(int(fr * g.n), 1)].mean() - half for fr in obs.DRIFT_FRACTIONS])
+    drift = obs.drift_means(d)
     return Deterministic(av, p, acov, drift)
 
 

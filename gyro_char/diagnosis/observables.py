@@ -14,8 +14,11 @@ Static blocks of one rate channel ``x`` (rad/s) sampled every ``dt`` seconds:
 - ``tone``: log10 prominence of the largest narrow peak over a running median of the PSD, in
   equal-width frequency bands (tone detection);
 - ``acf``: autocorrelation at lags 1..8 samples (correlated neighbouring samples);
-- ``drift``: mean of the first 1/64, 1/32, ... 1/2 of the record minus the mean of the second
-  half (warm-up transients, curvature), in rad/s.
+- ``drift``: mean of each early window minus the mean of the second half (warm-up transients,
+  curvature), in rad/s. The windows are disjoint shells, [0, 1/64), [1/64, 1/32), ...
+  [1/4, 1/2) of the record: nested windows (the first 1/64, 1/32, ...) correlated up to 0.7, so
+  one chance excursion at the start moved all six together and the block's mean z^2 had a
+  tail far heavier than a chi-square of six.
 
 Every block is computed on the record minus its least-squares line: bias and linear drift are
 part of the paper's model, so they never count as a gap.
@@ -33,6 +36,18 @@ ACF_LAGS = 8
 PSD_BINS = 20
 TONE_BANDS = 10
 DRIFT_FRACTIONS = (1 / 64, 1 / 32, 1 / 16, 1 / 8, 1 / 4, 1 / 2)
+
+
+def drift_windows(n: int):
+    """(start, stop) of each early window of the ``drift`` block: disjoint shells to n / 2."""
+    stops = [max(int(fr * n), 1) for fr in DRIFT_FRACTIONS]
+    return list(zip([0] + stops[:-1], stops))
+
+
+def drift_means(x: np.ndarray) -> np.ndarray:
+    """Mean of each early window of ``x`` minus the mean of its second half."""
+    half = x[x.size // 2:].mean()
+    return np.array([x[a:b].mean() - half for a, b in drift_windows(x.size)])
 
 
 @dataclass(frozen=True)
@@ -68,20 +83,20 @@ def static_layout(n: int, dt: float) -> Layout:
     edges = np.geomspace(2 * f[1], fs / 2, PSD_BINS + 1)
     band = np.linspace(0, fs / 2, TONE_BANDS + 1)
     lags = np.arange(1, ACF_LAGS + 1, dtype=float)
-    frac = np.asarray(DRIFT_FRACTIONS)
+    win = np.asarray(drift_windows(n), dtype=float) * dt
     coords = {
         'adev': tau,
         'psd': np.sqrt(edges[:-1] * edges[1:]),
         'tone': 0.5 * (band[:-1] + band[1:]),
         'acf': lags,
-        'drift': frac * n * dt,
+        'drift': win[:, 1],
     }
     ranges = {
         'adev': np.c_[tau, tau],
         'psd': np.c_[edges[:-1], edges[1:]],
         'tone': np.c_[band[:-1], band[1:]],
         'acf': np.c_[lags, lags],
-        'drift': np.c_[np.zeros_like(frac), frac * n * dt],
+        'drift': win,
     }
     return Layout(n=n, dt=dt, coords=coords, ranges=ranges)
 
@@ -146,8 +161,7 @@ def static_observables(x: np.ndarray, layout: Layout) -> Dict[str, np.ndarray]:
     for i, (lo, hi) in enumerate(layout.ranges['tone']):
         sel = (f > max(lo, f[1])) & (f <= hi)
         tone[i] = prom[sel].max() if sel.any() else 0.0
-    half = x[x.size // 2:].mean()
-    drift = np.array([x[:max(int(fr * x.size), 1)].mean() - half for fr in DRIFT_FRACTIONS])
+    drift = drift_means(x)
     return {
         'adev': np.log10(np.maximum(overlapping_adev(x, m, layout.dt), 1e-300)),
         'psd': np.log10(np.maximum(psd, 1e-300)),

@@ -65,10 +65,9 @@ def drift_forms(n: int):
     kc = k - k.mean()
     edges = np.unique(np.round(np.geomspace(1, n // 2 + 1, 400)).astype(int))
     out = []
-    for fr in obs.DRIFT_FRACTIONS:
+    for a, b in obs.drift_windows(n):
         c = np.zeros(n)
-        L = max(int(fr * n), 1)
-        c[:L] += 1.0 / L
+        c[a:b] += 1.0 / (b - a)
         c[n // 2:] -= 1.0 / (n - n // 2)
         c -= c.mean()
         c -= kc * (kc @ c) / (kc @ kc)

@@ -54,10 +54,10 @@ def add_options(p, require: bool = True) -> None:
                    help='comma-separated gyro channels (default: every gyro channel present)')
     p.add_argument('--holdout', default=None, metavar='INPUT',
                    help='record withheld from the fit, to check the selected model on')
-    p.add_argument('--repeats', type=int, default=8,
+    p.add_argument('--repeats', type=int, default=None,
                    help='simulated twins: of the baseline, for the null level (static, '
-                        'closed forms), or per model (swing, static --method twins); '
-                        'default 8')
+                        'closed forms; default 32), or per model (swing, static --method '
+                        'twins; default 8)')
     p.add_argument('--max-samples', type=int, default=None,
                    help='analyse the first N samples of each record (default: the whole '
                         'record; swing --method twins: 131072)')
@@ -102,9 +102,17 @@ def _dt(rec) -> float:
     return dt
 
 
+def default_repeats(kind: str, method: str) -> int:
+    """Twins per model: many of the cheap baseline for the closed forms' null, else 8."""
+    from gyro_char.diagnosis.static_expect import NULL_TWINS
+    return NULL_TWINS if kind == 'static' and method == 'closed-form' else 8
+
+
 def run(args, console: Optional[Console] = None) -> List[dict]:
     """Diagnose ``args.inputs``, write the files in ``args.out``; return the tidy gaps."""
     console = console or Console()
+    if args.repeats is None:
+        args.repeats = default_repeats(args.kind, getattr(args, 'method', 'closed-form'))
     if args.repeats < 4:
         raise InputError('--repeats must be >= 4 (the gap is judged against their scatter)')
     if args.kind == 'swing':
