@@ -1,8 +1,11 @@
 """The static closed forms against the bench simulator's twins and the IEEE formulas."""
+from dataclasses import replace
+
 from gyro_char.diagnosis import expected, spread, static, static_expect
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import evaluate_model, run
 from gyro_char.diagnosis.spectra import model_spectrum
+from gyro_char.jobs.diagnose_static import check_warnings
 from gyro_char.sim import noise_gen
 from gyro_char.sim.config import BenchConfig, noiseless
 from gyro_char.sim.effects.base import transient_terms
@@ -335,3 +338,27 @@ def test_line_amplitudes_are_read_from_the_psd_excess_within_a_few_per_cent():
     assert lines.size == 2
     got = dict(zip(np.round(lines, 1), amplitudes))
     assert got[27.3] == pytest.approx(2e-3, rel=0.05) and got[27.9] == pytest.approx(7e-4, rel=0.1)
+
+
+def test_an_angle_quantized_then_differenced_is_not_a_rounded_rate_and_is_named_quantization():
+    # The angle is published on a grid of 2e-3 rad and the host differences it: the rate
+    # takes values on a 0.2 rad/s grid, mostly 0 with one-step spikes. Read as a rate rounded
+    # to 0.2 rad/s, its white noise came out 7e-151 and every closed form broke (null level
+    # 5700); the grid is left to the quantization candidate instead.
+    rng = np.random.default_rng(12)
+    n, q = 2 ** 16, 2e-3
+    rate = 0.003 + 7e-4 / np.sqrt(DT) * rng.standard_normal(n + 1)
+    angle = np.round(np.cumsum(rate) * DT / q) * q
+    x = np.diff(angle) / DT
+    base = static.fit_baseline(x, DT)
+    assert base.lsb == 0.0 and 5e-4 < base.N < 1e-2
+    problem = static_expect.closed_form_problem([x], DT, seed=2)
+    assert all(0.5 < c['rms_residual'] < 2.0 for c in problem.check['records'][0].values())
+    assert check_warnings(problem.check) == []
+    # The old reading, forced: the twins' check says so instead of a silent gap.
+    old = replace(base, lsb=0.2, N=7e-151)
+    broken = static_expect.closed_form_problem([x], DT, base=old, twins=4, seed=2)
+    assert len(check_warnings(broken.check)) == 1
+    d = run(problem, seed=2)
+    assert d.null_gap['q95'] < 1.5
+    assert d.selected_effects[:1] == ['quantization']

@@ -300,6 +300,7 @@ def summary(channel: str, out: dict) -> str:
     for a in out['ambiguous']:
         lines.append(f'  ambiguous: {" / ".join(a["effects"])}; separating run: '
                      f'{a["separating_run"]}')
+    lines.extend(f'  WARNING: {w}' for w in out.get('warnings', []))
     for i, r in enumerate(out.get('per_record', [])):
         lines.append(f'  record {i + 1}: period {r["period_s"]:.4g} s, amplitude '
                      f'{r["amplitude_rad"]:.4g} rad, peak rate {r["peak_rate_rad_s"]:.4g} rad/s: '

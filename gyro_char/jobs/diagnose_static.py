@@ -125,6 +125,7 @@ def channel_task(task: dict) -> dict:
     out['analysed'] = analysed(task['records'], dt, task['sources'], opts['max_samples'])
     if problem.check:
         out['closed_form_check'] = problem.check
+        out['warnings'] = check_warnings(problem.check)
     if opts['method'] == 'closed-form' and opts['check'] > 0:
         out['posterior_predictive'] = posterior_predictive(problem, diag, opts['check'],
                                                            opts['seed'])
@@ -132,6 +133,23 @@ def channel_task(task: dict) -> dict:
         out['holdout'] = holdout_check(diag, task['holdout'], dt, ch, opts)
     if task.get('png'):
         plot_diagnosis(diag, problem.ranges[0], task['png'], title=f'{ch}: sim-to-real gap')
+    return out
+
+
+# Baseline twins off their closed form by more than this (rms, in its spread) void the gaps.
+CHECK_LIMIT = 3.0
+
+
+def check_warnings(check: dict) -> List[str]:
+    """Say where the baseline's own twins disagree with its closed forms (gaps not valid)."""
+    out = []
+    for i, rec in enumerate(check.get('records', [])):
+        bad = {b: c['rms_residual'] for b, c in rec.items() if c['rms_residual'] > CHECK_LIMIT}
+        if bad:
+            worst = ', '.join(f'{b} {v:.3g}' for b, v in bad.items())
+            out.append(f'record {i + 1}: the baseline\'s twins lie off its closed forms (rms '
+                       f'residual {worst}, expected ~1): the fitted baseline does not describe '
+                       'this record and its gaps are not valid; see "baseline"')
     return out
 
 
