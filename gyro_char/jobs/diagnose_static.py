@@ -147,7 +147,7 @@ def check_warnings(check: dict) -> List[str]:
         bad = {b: c['rms_residual'] for b, c in rec.items() if c['rms_residual'] > CHECK_LIMIT}
         if bad:
             worst = ', '.join(f'{b} {v:.3g}' for b, v in bad.items())
-            out.append(f'record {i + 1}: the baseline\'s twins lie off its closed forms (rms '
+            out.append(f'record {i + 1}: the twins of the baseline lie off its closed forms (rms '
                        f'residual {worst}, expected ~1): the fitted baseline does not describe '
                        'this record and its gaps are not valid; see "baseline"')
     return out
