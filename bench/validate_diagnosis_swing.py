@@ -225,7 +225,11 @@ def run_case(truth, seed, repeats, periods, **run):
                         seed=seed + 17)
 
 
-def cases(mode, quick, seeds, shape_set=None):
+# Seeds of the extra clean runs (``--clean``), apart from the shape seeds.
+CLEAN_SEED0 = 1000
+
+
+def cases(mode, quick, seeds, shape_set=None, clean_extra=0):
     """(mode, truth, seed) per case; truth = [(effect, level), ...]."""
     shape_set = SHAPES if shape_set is None else shape_set
     if quick:
@@ -241,6 +245,8 @@ def cases(mode, quick, seeds, shape_set=None):
             continue
         for s in seeds:
             yield m, [], s
+        for k in range(clean_extra):
+            yield m, [], CLEAN_SEED0 + k
         for name, (_, levels) in shape_set.items():
             for level in range(len(levels)):
                 for s in seeds:
@@ -253,6 +259,10 @@ def main(argv=None) -> int:
     ap.add_argument('--mode', choices=('single', 'two', 'pairs', 'all'), default='all')
     ap.add_argument('--repeats', type=int, default=5)
     ap.add_argument('--seeds', type=int, nargs='+', default=[11, 12])
+    ap.add_argument('--clean', type=int, default=0, metavar='K',
+                    help='K more clean runs per mode, seeds 1000.. (false alarms need many)')
+    ap.add_argument('--clean-only', action='store_true',
+                    help='the clean runs alone, no effect shapes')
     ap.add_argument('--duration', type=float, default=DURATION, help='run length, s (900)')
     ap.add_argument('--rate', type=float, default=RATE_HZ, help='gyro rate, Hz (1000)')
     ap.add_argument('--encoder-rate', type=float, default=ENCODER_RATE_HZ,
@@ -276,7 +286,9 @@ def main(argv=None) -> int:
           f'Hz; shapes: ' + (f'held-out {args.held_out}' if args.held_out else 'this harness'),
           flush=True)
     rows, t0 = [], time.time()
-    for mode, truth, seed in cases(args.mode, args.quick, args.seeds, shape_set):
+    todo = cases(args.mode, args.quick, args.seeds, {} if args.clean_only else shape_set,
+                 clean_extra=args.clean)
+    for mode, truth, seed in todo:
         d = run_case(truth, seed, args.repeats, (PERIOD,) if mode == 'single' else TWO_PERIODS,
                      **run)
         amb = sorted({n for a in d.ambiguous for n in a['effects']})
