@@ -10,6 +10,7 @@ rate error averaged over the gyro's own noise (swing).
 from functools import lru_cache
 
 from gyro_char.allan.expected import markov_avar
+from gyro_char.sim.config import BenchConfig
 import numpy as np
 
 
@@ -118,3 +119,15 @@ def stamp_z(stamp_psd, amp_rate: float, f0: float, n_arw: float, floor: float,
     f = np.linspace(-rate_hz / 2, rate_hz / 2, points)
     s_r = amp_rate ** 2 / 4 * (stamp_psd(f - f0) + stamp_psd(f + f0))
     return quadratic_z(s_r, f, n_arw, floor, duration)
+
+
+def swing_scales(period_s: float, duration: float):
+    """
+    Return the swing sets' yardsticks from the adis16405 preset: (N, amplitude, encoder, w, s).
+
+    s = N sqrt(2 / T) is the standard deviation of a sine fitted to a rate residual of length T.
+    """
+    cfg = BenchConfig.from_preset('adis16405')
+    n_arw = cfg.noise['gyro_x']['N']
+    w = 2 * np.pi / period_s
+    return n_arw, cfg.stand.amplitude, cfg.encoder, w, n_arw * np.sqrt(2 / duration)

@@ -34,9 +34,8 @@ error's 2x, the jitter's ~6x, the g x g term's the same:
   z^2 = sum over harmonics of a_k^2 (k L)^2 T (A w)^2 / (4 N^2).
 Edges are at z ~ 4; weak and strong are 5-50x further.
 """
-from gyro_char.sim.config import BenchConfig
 from gyro_char.sim.effects.sensor import second_order_gm
-from heldout_detect import encoder_floor, stamp_z
+from heldout_detect import encoder_floor, stamp_z, swing_scales
 import numpy as np
 from scipy import signal, special
 
@@ -98,10 +97,7 @@ def harmonic(func, amp: float, k: int, m: int = 200000) -> float:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp = cfg.noise['gyro_x']['N'], cfg.stand.amplitude
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     if name == 'time_delay':
         return amp * w * p['delay_s'] / (s / w)
@@ -115,7 +111,6 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
     if name == 'encoder_cyclic_error':
         big_a = p['a2'] ** 2 * (2 * LINES) ** 2 + (p['a2'] / 2) ** 2 * (4 * LINES) ** 2
         return float(np.sqrt(big_a * duration * (amp * w) ** 2 / (4 * n_arw ** 2)))
-    enc = cfg.encoder
 
     def s_e(x):
         return 4 * p['sigma_s'] ** 2 * JITTER_TC / (1 + (2 * np.pi * x * JITTER_TC) ** 2) ** 2

@@ -41,8 +41,7 @@ Edges are at z ~ 4 at the 5 s period (at 2.5 s: delay 4x, asymmetry, latency and
 swing); weak and strong are 4-50x further in z, the latency's 450-4000x (its z grows with
 the variance; weak is a typical 63 us sd).
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, quadratic_z
+from heldout_detect import encoder_floor, quadratic_z, swing_scales
 import numpy as np
 from scipy import signal, special
 
@@ -122,10 +121,7 @@ def harmonic(func, amp: float, k: int, m: int = 200000) -> float:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     if name == 'time_delay':
         return amp * w * p['window_s'] / 2 / (s / w)

@@ -46,8 +46,7 @@ hysteresis 1x, lock-in 0.5x: the swing spends less time in its dead band); weak 
 4-21x further in z, the sawtooth's 12-63x (100 and 500 ppm: a crystal and an RC clock). The
 strong disk error (eccentricity 3 mrad) is a magnetic or low-grade optical encoder's.
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z
+from heldout_detect import encoder_floor, matched_z, swing_scales
 import numpy as np
 from scipy import signal
 
@@ -146,10 +145,7 @@ def lines(err, amp: float, k: int, m: int = 200000) -> float:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     if name == 'time_delay':
         return amp * w * (p['taps'] - 1) / (2 * FS_INT) / (s / w)

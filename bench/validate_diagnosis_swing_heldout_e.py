@@ -58,8 +58,7 @@ hard), the weak 0.6 %; packet latencies uniform in +-60 us (a USB high-speed mic
 """
 from functools import lru_cache
 
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z, quadratic_z
+from heldout_detect import encoder_floor, matched_z, quadratic_z, swing_scales
 import numpy as np
 from scipy import signal
 
@@ -156,10 +155,7 @@ def lines(err, amp: float, k: int, period_s: float, m: int = 20000, settle: int 
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     if name == 'time_delay':
         num, den = isolator(p['fn'])

@@ -66,8 +66,7 @@ scale: RC cut-offs 840 Hz (edge), 265 Hz, 80 Hz (strong); g 3.4e-5 to 5e-4 rad/s
 settled asymmetries 0.03-0.6 %; character times of 1.8 Mbaud (edge), 460.8 kbaud (weak) and
 115.2 kbaud (strong) links; spot depths 0.18 %, 1.5 %, 8 %.
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, fourier, matched_z
+from heldout_detect import encoder_floor, fourier, matched_z, swing_scales
 import numpy as np
 from scipy import special
 
@@ -165,10 +164,7 @@ def inl_lines(e0: float, amp: float, kmax: int = 60) -> np.ndarray:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     if name == 'time_delay':
         return fourier(lambda r, th: track_lag(r, p['tau']), amp * w, 1) / (s / w)

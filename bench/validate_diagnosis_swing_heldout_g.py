@@ -58,8 +58,7 @@ TCXO's), 0.15-3.6 ms late at 900 s; g_y 5.7e-5 to 5e-4 rad/s/(m/s^2) (0.032-0.28
 anomalies of 0.022, 0.11 and 0.34 deg/s; asymmetries of 0.11 %, 0.4 % and 1 %; buffer skews
 of 0.25, 1 and 4 us; track skews of 0.52, 2.5 and 10 us (a multiplexed converter's).
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, fourier, matched_z, noise_mean
+from heldout_detect import encoder_floor, fourier, matched_z, noise_mean, swing_scales
 import numpy as np
 
 G0 = 9.80665
@@ -145,10 +144,7 @@ def smoothed_bump(w: np.ndarray, e0: float, s_n: float) -> np.ndarray:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     if name == 'g_sensitivity':
         def f_y(r, th):

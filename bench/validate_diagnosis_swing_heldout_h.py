@@ -44,8 +44,7 @@ dead-band offsets of 0.011, 0.034 and 0.11 deg/s; square-law terms b of 1.1e-3, 
 3e-2 per rad/s; counter ticks of 0.56, 2.44 and 9.77 us (1.79 MHz, 409.6 kHz, 102.4 kHz);
 head tilts of 0.39, 2 and 6 mrad of line phase between the tracks.
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, fourier, matched_z, noise_mean
+from heldout_detect import encoder_floor, fourier, matched_z, noise_mean, swing_scales
 import numpy as np
 
 G0 = 9.80665
@@ -115,10 +114,7 @@ def smoothed_offset(w: np.ndarray, e0: float, s_n: float) -> np.ndarray:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     if name == 'g_sensitivity':
         def err(r, th):

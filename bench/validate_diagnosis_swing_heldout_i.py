@@ -49,8 +49,7 @@ z. Physical scale: delays of 0.188 (edge), 1 and 3 ms; g_y (settled) of 2.1e-5, 
 (the gain departs by 0.1-4 %); ripple jitters J of 1.07, 5 and 20 us; half-pitch admixtures e
 of 4.7e-4, 3e-3 and 1e-2 of the track amplitude.
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z, noise_lines
+from heldout_detect import encoder_floor, matched_z, noise_lines, swing_scales
 import numpy as np
 from scipy import signal, special
 
@@ -129,10 +128,7 @@ def shapes(rate_hz: float) -> dict:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     s_n = n_arw * np.sqrt(rate_hz)
     p = params
     if name == 'g_sensitivity':

@@ -53,8 +53,7 @@ deg/s/g, the same per g^2); dead-time scales W of 315, 20 and 6 rad/s (compressi
 0.04; service times h of 13, 150 and 400 us; scale gaps of 1.3, 8 and 30 arcsec (0.3-7 um
 at a 50 mm radius).
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, fourier, matched_z, noise_lines
+from heldout_detect import encoder_floor, fourier, matched_z, noise_lines, swing_scales
 import numpy as np
 from scipy import signal
 
@@ -146,10 +145,7 @@ def shapes(rate_hz: float) -> dict:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     s_n = n_arw * np.sqrt(rate_hz)
     p = params
     if name == 'g_sensitivity':

@@ -51,8 +51,7 @@ front-end ranges of 42, 39 and 32 deg/s (quadrature 34, 31, 25 deg/s; onsets 25.
 18.9 deg/s against the swing's 25.1 deg/s peak); mean asymmetries a of 5.45e-4 (edge), 0.01
 and 0.04; busy spreads of 29, 150 and 400 us; disk errors of 2.8, 12 and 40 arcsec rms.
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z, noise_lines, stamp_z
+from heldout_detect import encoder_floor, matched_z, noise_lines, stamp_z, swing_scales
 import numpy as np
 from scipy import signal
 from validate_diagnosis_heldout_k import two_state
@@ -178,10 +177,7 @@ def shapes(rate_hz: float) -> dict:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     s_n = n_arw * np.sqrt(rate_hz)
     p = params
     if name == 'g_sensitivity':

@@ -55,7 +55,7 @@ mismatches of 0.19, 2 and 6 ms; mean latencies of 93, 300 and 800 us (residual s
 on the 720 arcsec pitch).
 """
 from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z, noise_mean, stamp_z
+from heldout_detect import encoder_floor, matched_z, noise_mean, stamp_z, swing_scales
 import numpy as np
 
 G0 = 9.80665
@@ -161,10 +161,7 @@ def shapes(rate_hz: float) -> dict:
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     s_n = n_arw * np.sqrt(rate_hz)
     p = params
     th = np.arange(4096) * 2 * np.pi / 4096

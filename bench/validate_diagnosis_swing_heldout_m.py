@@ -58,8 +58,7 @@ compensated to a sawtooth of 0.0076, 0.056 and 0.14 deg/s peak; magnetisation ga
 servo node noise of 0.59, 2 and 5 ms sd (NTP on a LAN); LED ratio wander of 0.32 %, 1 % and
 3 % sd (cyclic error 0.11-1.0 arcsec peak on the 432 arcsec pitch).
 """
-from gyro_char.sim.config import BenchConfig
-from heldout_detect import encoder_floor, matched_z, stamp_z
+from heldout_detect import encoder_floor, matched_z, stamp_z, swing_scales
 import numpy as np
 from scipy import signal
 
@@ -183,10 +182,7 @@ def led_z(gamma: float, amp: float, w: float, n_arw: float, floor: float, durati
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
-    cfg = BenchConfig.from_preset('adis16405')
-    n_arw, amp, enc = cfg.noise['gyro_x']['N'], cfg.stand.amplitude, cfg.encoder
-    w = 2 * np.pi / period_s
-    s = n_arw * np.sqrt(2 / duration)
+    n_arw, amp, enc, w, s = swing_scales(period_s, duration)
     p = params
     th = np.arange(4096) * 2 * np.pi / 4096
     if name == 'g_sensitivity':

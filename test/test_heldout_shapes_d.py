@@ -3,6 +3,7 @@
 # claim, and both harnesses reach them by --held-out d. THE GENERATORS only, never the diagnosis.
 import bench_script
 from gyro_char.allan.expected import markov_avar
+from gyro_char.sim.config import BenchConfig
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
                             fit, flicker_band_psd, N_ARW, SIG, stand, swing, W)
 import numpy as np
@@ -172,7 +173,7 @@ def test_tilt_hysteresis_is_backlash_and_its_lag_does_not_depend_on_the_period()
         c = fit(b[m], (np.sin(w * t[m]), np.cos(w * t[m])))
         phases.append(np.arctan2(-c[1], c[0]))
         if per == 5.0:
-            z = np.hypot(*c) * gy / (SWING.BenchConfig.from_preset('adis16405').noise[
+            z = np.hypot(*c) * gy / (BenchConfig.from_preset('adis16405').noise[
                 'gyro_x']['N'] * np.sqrt(2 / 900.0))
             assert z == pytest.approx(SWING.detectability('g_sensitivity', levels[1]), rel=0.01)
     assert phases[0] > 0.05 and phases[1] == pytest.approx(phases[0], abs=1e-3)
@@ -190,7 +191,7 @@ def test_lock_in_dead_band_square_root_edge_and_third_harmonic():
     fast = np.abs(rate) > 0.4
     assert np.allclose(g[fast] - rate[fast], -w_l ** 2 / (2 * rate[fast]), rtol=0.02)
     c = fit(g - rate, (np.cos(3 * W * t), np.sin(3 * W * t)))
-    s = SWING.BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
+    s = BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
     assert np.hypot(*c) / s == pytest.approx(
         SWING.detectability('scale_factor_nonlinearity', {'w_l': w_l}), rel=0.01)
 
@@ -205,7 +206,7 @@ def test_schmitt_asymmetry_switches_late_after_each_reversal_and_second_harmonic
     rising = (np.abs(rate) < SWING.SCHMITT) & (np.gradient(rate) > 0) & (rate > 0)
     assert rising.any() and np.all(state[rising] == -1.0)           # still the old gain
     c = fit(g - rate, (np.cos(2 * W * t), np.sin(2 * W * t), np.ones(t.size)))
-    s = SWING.BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
+    s = BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
     assert np.hypot(c[0], c[1]) / s == pytest.approx(
         SWING.detectability('scale_factor_asymmetry', levels[1]), rel=0.01)
     assert abs(c[1]) > 1e-3 * abs(c[0])                  # the late switch has a sin part
