@@ -44,3 +44,11 @@ def test_a_clean_record_whose_start_wanders_by_chance_names_no_warm_up():
                    repeats=h.static_expect.NULL_TWINS)
     assert d.selected_effects == []
     assert d.null_gap['repeats'] == h.static_expect.NULL_TWINS
+
+
+def test_extra_clean_records_come_at_their_own_seeds_before_the_shapes():
+    h = _harness()
+    todo = list(h.cases(False, [11, 12], levels=[1], pairs=False, clean_extra=2))
+    clean = [c for c in todo if not c[1]]
+    assert [c[2] for c in clean] == [11, 12, h.CLEAN_SEED0, h.CLEAN_SEED0 + 1]
+    assert todo[:4] == clean and len(todo) == 4 + 2 * len(h.SHAPES)

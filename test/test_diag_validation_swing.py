@@ -88,3 +88,12 @@ def test_held_out_without_its_file_says_so(monkeypatch):
     monkeypatch.setattr(h, 'HELD_OUT', 'no_such_heldout_file')
     with pytest.raises(SystemExit, match='no no_such_heldout_file.py'):
         h.main(['--held-out', '--quick'])
+
+
+def test_extra_clean_runs_have_their_own_seeds_and_clean_only_drops_the_shapes():
+    h = _harness()
+    todo = list(h.cases('single', False, [11], {}, clean_extra=3))
+    assert todo == [('single', [], 11)] + [('single', [], h.CLEAN_SEED0 + k) for k in range(3)]
+    full = list(h.cases('two', False, [11], clean_extra=1))
+    assert [c for c in full if not c[1]] == [('two', [], 11), ('two', [], h.CLEAN_SEED0)]
+    assert len(full) == 2 + sum(len(levels) for _, levels in h.SHAPES.values())
