@@ -21,8 +21,8 @@ from gyro_char.diagnosis.spectra import model_spectrum
 import numpy as np
 
 # Twins of the baseline behind the null level (its 95th percentile and spread): with 8, the
-# 95th percentile of a skewed distribution is read off nearly its largest sample, and 20 % of
-# clean records scored above it. They are cheap (white noise and rounding).
+# 95th percentile of a skewed distribution is read off nearly its largest sample, and 5 of 30
+# clean 2 h records scored above it. They are cheap (white noise and rounding).
 NULL_TWINS = 32
 
 
