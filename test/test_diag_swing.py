@@ -1,10 +1,14 @@
 # The swing kind of the diagnosis on simulated swing records with an effect it is not told of.
+from dataclasses import replace
 from types import SimpleNamespace
 
 from gyro_char.diagnosis import (engine as diagnose, gap as diag_gap, swing as diag_swing,
                                  swing_obs as diag_swing_obs)
 from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.swing_baseline import fit_baseline, pooled_scale_factor
+from gyro_char.diagnosis.swing_calibrate import calibrate_encoder, turning_power
 from gyro_char.diagnosis.swing_spaces import signs, unresolved_pairs
+from gyro_char.diagnosis.swing_twin import record_scale, twin_config
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 from gyro_char.swing.filter import estimate_swing
@@ -33,7 +37,7 @@ def test_swing_observables_see_a_delay_in_quadrature_only():
     # Same seed with and without a stamp delay: only the cos θ component moves, by -A ω d.
     d = 0.37 / RATE_HZ
     (i0, e0), (i1, e1) = _record([], 3), _record([('time_delay', {'delay_s': d})], 3)
-    base = diag_swing.fit_baseline(i0, e0, 5.0)
+    base = fit_baseline(i0, e0, 5.0)
     ranges = diag_swing_obs.layout(len(i0), base.dt, 5.0)
     o0 = diag_swing_obs.swing_observables(i0.t, i0.channels['gyro_x'], e0.t,
                                           e0.channels['encoder'], 5.0, ranges)
@@ -109,7 +113,7 @@ def test_clean_swing_record_raises_no_effect():
 def test_baseline_takes_the_kalman_estimates():
     imu, enc = _record([], 44)
     est = estimate_swing(imu, enc, 5.0).estimates
-    base = diag_swing.fit_baseline(imu, enc, 5.0)
+    base = fit_baseline(imu, enc, 5.0)
     assert base.scale_factor_error == est.scale_factor_error.value
     assert base.dt == pytest.approx(1.0 / RATE_HZ, rel=1e-4)
     assert base.amplitude == pytest.approx(20.0 * np.pi / 180.0, rel=1e-3)
@@ -132,7 +136,7 @@ def test_two_periods_tell_g_sensitivity_from_a_delay():
     assert diag.steps[0]['params']['gy'] == pytest.approx(gy, rel=0.3)
     assert diag.final_gap < diag.null_gap['final_model_q95']
     # One gyro, one scale factor: both twins get the pooled Kalman estimate.
-    pooled, _ = diag_swing.pooled_scale_factor(problem.context)
+    pooled, _ = pooled_scale_factor(problem.context)
     assert [b.scale_factor_error for b in problem.context] == [pooled, pooled]
     assert len({b.record_scale_factor_error for b in problem.context}) == 2
 
@@ -145,8 +149,8 @@ def test_scale_factor_shift_measures_a_cubic_term_across_peak_rates():
     for per in (5.0, 2.5):
         for k in (0.0, k3):
             imu, enc = _record([('scale_factor_nonlinearity', {'k2': 0.0, 'k3': k})], 46, per)
-            scales[per, k] = diag_swing.record_scale(imu, enc, 'x')
-        rates.append(diag_swing.fit_baseline(imu, enc, per).peak_rate)
+            scales[per, k] = record_scale(imu, enc, 'x')
+        rates.append(fit_baseline(imu, enc, per).peak_rate)
     expected = 0.75 * k3 * (rates[1] ** 2 - rates[0] ** 2)
     assert scales[2.5, k3] - scales[5.0, k3] == pytest.approx(expected, rel=0.05)
     assert abs(scales[2.5, 0.0] - scales[5.0, 0.0]) < 0.02 * expected
@@ -154,10 +158,10 @@ def test_scale_factor_shift_measures_a_cubic_term_across_peak_rates():
 
 def test_pooled_scale_factor_is_the_inverse_variance_mean():
     imu, enc = _record([], 47)
-    b = diag_swing.fit_baseline(imu, enc, 5.0)
-    b1 = diag_swing.replace(b, record_scale_factor_error=b.record_scale_factor_error + 3e-4,
+    b = fit_baseline(imu, enc, 5.0)
+    b1 = replace(b, record_scale_factor_error=b.record_scale_factor_error + 3e-4,
                             record_scale_factor_sigma=2 * b.record_scale_factor_sigma)
-    sf, sig = diag_swing.pooled_scale_factor([b, b1])
+    sf, sig = pooled_scale_factor([b, b1])
     assert sf == pytest.approx(b.record_scale_factor_error + 3e-4 / 5, rel=1e-9)
     assert sig == pytest.approx(b.record_scale_factor_sigma / np.sqrt(1.25), rel=1e-9)
 
@@ -167,14 +171,14 @@ def test_twin_encoder_noise_is_pinned_where_stamp_jitter_vanishes():
     # ~15x the 3 urad ADC noise; at the turning points it is gone, and the twin gets the ADC
     # level back (within the turning-point estimate's reach of the other white terms).
     imu, enc = _record([('timestamp_jitter', {'sigma_s': 1.5e-4, 'stream': 2.0})], 48)
-    base = diag_swing.fit_baseline(imu, enc, 5.0)
-    lumped = diag_swing.twin_config(base).encoder.adc_noise
-    pinned = diag_swing.twin_config(diag_swing.calibrate_encoder(base, enc)).encoder.adc_noise
+    base = fit_baseline(imu, enc, 5.0)
+    lumped = twin_config(base).encoder.adc_noise
+    pinned = twin_config(calibrate_encoder(base, enc)).encoder.adc_noise
     assert lumped > 10 * 3e-6
     assert pinned < 5e-6
     clean_imu, clean_enc = _record([], 48)
-    assert diag_swing.turning_noise(enc, 5.0) == pytest.approx(
-        diag_swing.turning_noise(clean_enc, 5.0), rel=0.15)
+    assert turning_power(enc, 5.0)[0] == pytest.approx(turning_power(clean_enc, 5.0)[0],
+                                                        rel=0.3)
 
 
 def test_unresolved_pairs_follow_the_periods_and_peak_rates_given():
