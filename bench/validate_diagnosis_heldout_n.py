@@ -18,15 +18,16 @@ the kinds of departure differ from shape to shape:
 - temperature_drift: a chamber staircase: the bench sits in a thermal chamber running a
   calibration profile of equal temperature steps every 1200 s, the die following each step
   through its 300 s lag: A sum_j (1 - exp(-(t' - 1200 j) / 300)) over the steps taken, t' = t
-  + t0, t0 in 0-600 s: repeated exponential settlings, a staircase that never returns;
+  + t0, t0 in 600-1800 s (the record starts mid-profile, one step still settling): repeated
+  exponential settlings, a staircase that never returns;
 - bias_instability: a comparator-switched trim: the ASIC switches a bias trim of +-b by a
   comparator on a reference node that sits at its threshold and carries 1/f noise (a
   Gaussian sum of eleven first-order processes, two per decade, 0.1-10^4 s): b sign(g), two
   levels, clustered (non-renewal) switching, autocovariance b^2 (2 / pi) asin(rho);
 - rate_random_walk: stress-proportional creep: the bias follows a die-attach stress that
-  creeps with a noise proportional to itself, dS = sigma S dW (Ito, sigma^2 = 1 / 3600 s):
+  creeps with a noise proportional to itself, dS = sigma S dW (Ito, sigma^2 = 1 / 14400 s):
   b = s0 (exp(sigma W - sigma^2 t / 2) - 1), zero-mean uncorrelated increments whose intensity
-  K^2 e^(sigma^2 t) grows with the excursion (skewed, non-Gaussian, heavier late in a record);
+  sigma^2 (s0 + b)^2 follows the excursion, K^2 e^(sigma^2 t) on average (skewed, log-normal);
 - gauss_markov: an amphoteric trap: a defect with three charge states (neutral, +, -), the
   charged states decaying to neutral at rate 1 / tc, neutral 80 % of the time and charged to
   either sign alike: three levels, bursts of either sign between neutral pauses, E[X_t | X_0] =
@@ -51,7 +52,7 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
   the first-order Gauss-Markov formula;
 - creep: q^2 (2 m^2 + 1) / (6 m), q^2 = K^2 dt times the intensity's mean over the record,
   (e^(sigma^2 T) - 1) / (sigma^2 T) (exact for uncorrelated increments, on average);
-- chamber: matched to its own noise-free waveform (t0 = 300 s), mean removed:
+- chamber: matched to its own noise-free waveform (t0 = 1200 s), mean removed:
   |s - mean(s)| / sigma;
 - latch skew: the glitch g_k correlates with the sample's own increment, E[x g] = -s E[x^2],
   so the angle error's variance c0 = Q s E|x| + Q^2 / (12 256^2) and its covariance with the
@@ -62,8 +63,8 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
 Edges are set at z ~ 4; weak and strong are several to hundreds of times further in z.
 Physical scale: idle shares of 2.5 % (edge), 30 % and 80 %; hum of 0.0099, 0.034 and 0.086
 deg/s peak; chamber steps of 0.0011, 0.011 and 0.057 deg/s a step (0.08, 0.85 and 4.2 degC
-at 0.0135 (deg/s)/degC); trims of +-24, 62 and 206 deg/h; creep of K 1.1e-6, 6e-6 and 2e-5
-rad/s/sqrt(s) at the start (s0 0.0039-0.069 deg/s); traps of 0.0089, 0.057 and 0.11 deg/s sd
+at 0.0135 (deg/s)/degC); trims of +-24, 62 and 206 deg/h; creep of K 1.8e-6, 6e-6 and 2e-5
+rad/s/sqrt(s) at the start (s0 0.012-0.14 deg/s); traps of 0.0089, 0.057 and 0.11 deg/s sd
 (tc 3 s, 3 s and 30 s); latch skews of 14 us, 0.3 ms and 2 ms; tuned mounts of 0.018, 0.069
 and 0.34 deg/s sd.
 """
@@ -77,7 +78,7 @@ IDLE_AVG, IDLE_S = 4, 20.0                          # conversions averaged; mean
 HUM_HZ, GRID_SD, GRID_TC = 100.0, 0.02, 60.0        # hum; grid deviation sd (Hz), its time (s)
 STEP_S, CHAMBER_LAG = 1200.0, 300.0                 # s: chamber step period, the die's lag
 TRIM_TAUS = 0.1 * 10.0 ** (np.arange(11) / 2)       # s: the reference's Gauss-Markov times
-CREEP = 1.0 / 3600.0                                # 1/s: sigma^2 of the stress creep
+CREEP = 1.0 / 14400.0                               # 1/s: sigma^2 of the stress creep
 NEUTRAL = 0.8                                       # share of time the trap is neutral
 BIAS = 0.003                                        # rad/s: the static records' bias
 COARSE, FINE = 5e-4, 256                            # rad: coarse step; fine steps per coarse
@@ -236,7 +237,7 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
         return x + hum(x.size, amplitude, dt, rng)
 
     def chamber(x, rng, amplitude):
-        return x + staircase(np.arange(x.size) * dt + rng.uniform(0, 600), amplitude)
+        return x + staircase(np.arange(x.size) * dt + rng.uniform(600, 1800), amplitude)
 
     def trimmed(x, rng, b):
         return x + b * np.sign(reference(x.size, dt, rng))
@@ -261,9 +262,9 @@ def shapes(dt: float, sig: float, n_arw: float) -> dict:
         'vibration': (hummed, [{'amplitude': 6e-4}, {'amplitude': 1.5e-3},
                                {'amplitude': 1.73e-4}]),
         'temperature_drift': (chamber, [{'amplitude': 2e-4}, {'amplitude': 1e-3},
-                                        {'amplitude': 1.94e-5}]),
+                                        {'amplitude': 1.91e-5}]),
         'bias_instability': (trimmed, [{'b': 3e-4}, {'b': 1e-3}, {'b': 1.17e-4}]),
-        'rate_random_walk': (crept, [{'k': 6e-6}, {'k': 2e-5}, {'k': 1.135e-6}]),
+        'rate_random_walk': (crept, [{'k': 6e-6}, {'k': 2e-5}, {'k': 1.78e-6}]),
         'gauss_markov': (trap, [{'sd': 1e-3, 'tc': 3.0}, {'sd': 2e-3, 'tc': 30.0},
                                 {'sd': 1.55e-4, 'tc': 3.0}]),
         'quantization': (skewed, [{'s': 3e-4}, {'s': 2e-3}, {'s': 1.4e-5}]),
@@ -278,7 +279,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'internal_lowpass':
         return float(idle_r1(p['share'], dt) * np.sqrt(n))
     if name == 'temperature_drift':
-        s = staircase(np.arange(n) * dt + 300.0, p['amplitude'])
+        s = staircase(np.arange(n) * dt + 1200.0, p['amplitude'])
         return float(np.linalg.norm(s - s.mean()) / sig)
     if name == 'quantization':
         rel = [skew_excess(p['s'], dt, sig, n_arw, m) for m in (1, 10)]
