@@ -99,13 +99,13 @@ def dwell_states(n: int, dt: float, means, first: int, rng) -> np.ndarray:
 
 
 def idle_spells(n: int, share: float, dt: float, rng) -> np.ndarray:
-    """True while idle: a two-state Markov chain, mean idle spell IDLE_S, idle a ``share``."""
+    """Return True while idle: a two-state Markov chain, mean idle spell IDLE_S, a ``share``."""
     means = [IDLE_S * (1 - share) / share, IDLE_S]       # awake, idle
     return dwell_states(n, dt, means, int(rng.uniform() < share), rng) == 1
 
 
 def idle_average(x: np.ndarray, idle: np.ndarray) -> np.ndarray:
-    """Mean of the last IDLE_AVG samples where ``idle`` (x_0 held before the start), x elsewhere."""
+    """Return the mean of the last IDLE_AVG samples where ``idle`` (x_0 before), x elsewhere."""
     pad = np.r_[np.full(IDLE_AVG - 1, x[0]), x]
     box = np.convolve(pad, np.full(IDLE_AVG, 1.0 / IDLE_AVG), mode='valid')
     return np.where(idle, box, x)
@@ -125,7 +125,7 @@ def gauss_markov(n: int, tc: float, dt: float, rng) -> np.ndarray:
 
 
 def hum(n: int, amplitude: float, dt: float, rng) -> np.ndarray:
-    """A cos(2 pi (HUM_HZ t + 2 int df dt) + p) sampled at dt; df the grid's deviation."""
+    """Return A cos(2 pi (HUM_HZ t + 2 int df dt) + p) sampled at dt; df the grid's deviation."""
     df = GRID_SD * gauss_markov(n, GRID_TC, dt, rng)
     cycles = np.mod(HUM_HZ * dt * np.arange(n), 1.0) + 2 * np.cumsum(df) * dt
     return amplitude * np.cos(2 * np.pi * cycles + rng.uniform(0, 2 * np.pi))
@@ -139,7 +139,7 @@ def hum_cov(u, amplitude: float) -> np.ndarray:
 
 
 def staircase(t, amplitude: float) -> np.ndarray:
-    """A sum over steps j >= 1 of (1 - exp(-(t - STEP_S j) / CHAMBER_LAG)) after each step."""
+    """Return A sum over steps j >= 1 of (1 - exp(-(t - STEP_S j) / CHAMBER_LAG)) after each."""
     t = np.asarray(t, float)
     out = np.zeros_like(t)
     for j in range(1, int(t.max() // STEP_S) + 1):
@@ -173,7 +173,7 @@ def creep_mean_intensity(big_t: float) -> float:
 
 
 def amphoteric(n: int, sd: float, tc: float, dt: float, rng) -> np.ndarray:
-    """Neutral (0) / charged (+-1) trap, charged dwell tc, neutral NEUTRAL of the time; sd ``sd``."""
+    """Return a neutral (0) / charged (+-1) trap: charged dwell tc, neutral a NEUTRAL share."""
     pairs = dwell_states(n, dt, [tc * NEUTRAL / (1 - NEUTRAL), tc],
                          int(rng.uniform() > NEUTRAL), rng)
     start = np.r_[True, np.diff(pairs) != 0]
