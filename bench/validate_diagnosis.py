@@ -219,7 +219,8 @@ def main(argv=None) -> int:
                     help=f'K more clean records, seeds {CLEAN_SEED0}.. (the clean record of a '
                          'seed is the same in every shape set: false alarms need many)')
     ap.add_argument('--held-out', nargs='?', const='a',
-                    choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm'),
+                    choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm',
+                             'n'),
                     default=None,
                     help='a held-out shape set, no pairs: a = validate_diagnosis_heldout.py '
                          '(used once in session 3), b = validate_diagnosis_heldout_b.py, '
@@ -233,7 +234,8 @@ def main(argv=None) -> int:
                          'j = validate_diagnosis_heldout_j.py, '
                          'k = validate_diagnosis_heldout_k.py, '
                          'l = validate_diagnosis_heldout_l.py, '
-                         'm = validate_diagnosis_heldout_m.py')
+                         'm = validate_diagnosis_heldout_m.py, '
+                         'n = validate_diagnosis_heldout_n.py')
     ap.add_argument('--only', nargs='+', default=None, metavar='NAME',
                     help='only these shapes (and no pairs, no clean records)')
     ap.add_argument('--repeats', type=int, default=None,
@@ -259,7 +261,7 @@ def main(argv=None) -> int:
                                                  'g': '_g', 'h': '_h',
                                                  'i': '_i', 'j': '_j',
                                                  'k': '_k', 'l': '_l',
-                                                 'm': '_m'}[args.held_out]
+                                                 'm': '_m', 'n': '_n'}[args.held_out]
         shapes = importlib.import_module(module).shapes(DT, SIG, N_ARW)
     todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out,
                  clean_extra=args.clean)

@@ -268,7 +268,7 @@ def main(argv=None) -> int:
     ap.add_argument('--encoder-rate', type=float, default=ENCODER_RATE_HZ,
                     help='encoder rate, Hz (1000)')
     ap.add_argument('--held-out', nargs='?', const='b',
-                    choices=('b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm'),
+                    choices=('b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm', 'n'),
                     default=None,
                     help=f'a held-out set instead of the shapes here: b (the flag alone) = '
                          f'bench/{HELD_OUT}.py, c = bench/{HELD_OUT}_c.py, '
@@ -276,7 +276,8 @@ def main(argv=None) -> int:
                          f'f = bench/{HELD_OUT}_f.py, g = bench/{HELD_OUT}_g.py, '
                          f'h = bench/{HELD_OUT}_h.py, i = bench/{HELD_OUT}_i.py, '
                          f'j = bench/{HELD_OUT}_j.py, k = bench/{HELD_OUT}_k.py, '
-                         f'l = bench/{HELD_OUT}_l.py, m = bench/{HELD_OUT}_m.py')
+                         f'l = bench/{HELD_OUT}_l.py, m = bench/{HELD_OUT}_m.py, '
+                         f'n = bench/{HELD_OUT}_n.py')
     args = ap.parse_args(argv)
     shape_set = (held_out_shapes(args.rate, args.held_out) if args.held_out
                  else shapes(args.rate))
