@@ -160,7 +160,7 @@ def test_pooled_scale_factor_is_the_inverse_variance_mean():
     imu, enc = _record([], 47)
     b = fit_baseline(imu, enc, 5.0)
     b1 = replace(b, record_scale_factor_error=b.record_scale_factor_error + 3e-4,
-                            record_scale_factor_sigma=2 * b.record_scale_factor_sigma)
+                 record_scale_factor_sigma=2 * b.record_scale_factor_sigma)
     sf, sig = pooled_scale_factor([b, b1])
     assert sf == pytest.approx(b.record_scale_factor_error + 3e-4 / 5, rel=1e-9)
     assert sig == pytest.approx(b.record_scale_factor_sigma / np.sqrt(1.25), rel=1e-9)
@@ -178,7 +178,7 @@ def test_twin_encoder_noise_is_pinned_where_stamp_jitter_vanishes():
     assert pinned < 5e-6
     clean_imu, clean_enc = _record([], 48)
     assert turning_power(enc, 5.0)[0] == pytest.approx(turning_power(clean_enc, 5.0)[0],
-                                                        rel=0.3)
+                                                       rel=0.3)
 
 
 def test_unresolved_pairs_follow_the_periods_and_peak_rates_given():

@@ -48,10 +48,10 @@ def test_the_turning_point_power_knows_its_own_standard_error():
 
 
 def test_each_twin_carries_a_draw_of_the_calibration_error():
-    # A clean run's baseline: its calibrated levels carry a standard error, their shifts move
-    # the residual's lag-1 increment correlation by more than the twins' own scatter, and the
-    # wrapped twins scatter by sqrt(own^2 + shifts^2) there.
-    run = _run(21)
+    # A clean 2-min 1 kHz run's baseline: its calibrated levels carry a standard error, their
+    # shifts move the residual's lag-1 increment correlation by more than the twins' own
+    # scatter, and the wrapped twins scatter by sqrt(own^2 + shifts^2) there.
+    run = _run(21, duration=120.0, rate_hz=1000.0)
     problem = diag_swing.swing_records_problem([(run.imu, run.encoder, 5.0)])
     base = problem.context[0]
     assert base.encoder_power_sd > 0 and base.n_log_sd > 0
@@ -59,10 +59,10 @@ def test_each_twin_carries_a_draw_of_the_calibration_error():
     assert len(shifts) == 2
     lag1 = np.hypot(shifts[0]['increment_acf'][0], shifts[1]['increment_acf'][0])
     plain = diag_swing.expected_twins(problem.context, problem.ranges, False)
-    own = np.std([plain(0, [], 500 + k)['increment_acf'][0] for k in range(12)], ddof=1)
+    own = np.std([plain(0, [], 500 + k)['increment_acf'][0] for k in range(24)], ddof=1)
     assert lag1 > own
     wrapped = with_calibration_error(plain, [shifts])
-    reps = [wrapped(0, [], 500 + k) for k in range(40)]
+    reps = [wrapped(0, [], 500 + k) for k in range(24)]
     got = diag_gap.sim_stats(reps).std['increment_acf'][0]
     assert got == pytest.approx(np.hypot(own, lag1), rel=0.35)
     # The same seed gets the same draw (every candidate model sees the same error).

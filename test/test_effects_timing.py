@@ -85,3 +85,28 @@ def test_negative_lag_or_correlation_time_is_refused():
         parse_effect('time_delay:lag_s=-1e-3')
     with pytest.raises(InputError):
         parse_effect('timestamp_jitter:tau_s=-1')
+
+
+def test_a_smooth_stamp_error_is_second_order_and_not_clipped():
+    # order 2: a clock offset slewed by a servo, 2 ms sd (two sample intervals) over 1 s:
+    # stationary, unclipped (a white error is clipped at 0.45 interval), autocorrelation
+    # (1 + k / n) e^(-k / n) of the critically damped pair of poles (n = tau / dt), steps
+    # far below the interval.
+    cfg = _quiet_swing()
+    dt = 1.0 / cfg.gyro.rate_hz
+    sigma, tau = 2e-3, 1.0
+    es = []
+    for seed in range(4):
+        run = simulate_swing(cfg, duration=300.0, seed=seed, channels=['gyro_x'], effects=[
+            f'timestamp_jitter:sigma_s={sigma},stream=0,tau_s={tau},order=2'])
+        es.append(run.imu.t - np.arange(len(run.imu)) * dt)
+    e = np.concatenate(es)
+    assert np.std(e) == pytest.approx(sigma, rel=0.2)
+    assert np.max(np.abs(e)) > 2 * dt
+    n = tau / dt
+    for k in (int(n / 4), int(n)):
+        rho = np.mean([np.sum(x[k:] * x[:-k]) / np.sum(x * x) for x in es])
+        assert rho == pytest.approx((1 + k / n) * np.exp(-k / n), abs=0.1)
+    assert np.max(np.abs(np.diff(es[0]))) < 0.01 * dt
+    with pytest.raises(InputError):
+        parse_effect('timestamp_jitter:tau_s=1,order=3')

@@ -67,6 +67,8 @@ def median_ratio_error(sims: np.ndarray) -> float:
 
 TURNING_COS = 0.05  # |cos θ| below this: within ~3° of phase of a turning point
 CALIBRATION_STREAM = 0xCA1  # the random stream of the twins' calibration errors
+ENCODER_PASSES = 3          # at most, each from the level the last one found
+NEAR = 0.25                 # twins within this share of the record's power: no further pass
 
 
 def turning_power(encoder: Recording, period_s: float) -> Tuple[float, float]:
@@ -109,19 +111,27 @@ def calibrate_encoder(base: SwingBaseline, encoder: Recording,
     whole swing: an encoder stamp jitter (rate x error, 6 to 36 times the ADC noise in the
     validation's jitter cases) would otherwise be built into the baseline twin, and a jitter
     candidate could only add more. The twins' turning-point power (``turning_power``) is
-    matched to the record's by moving the ADC noise (variances add). The match's error (the
-    record's and the twins' sampling error) is kept as ``encoder_power_sd``.
+    matched to the record's by moving the ADC noise (variances add), again from the level
+    found while the twins were far off: their power's sampling error (1 %) is a share of
+    their own level, and from a filter estimate lumping in milliseconds of stamp error (100
+    times the ADC noise) one step left the level at that noise (4 times the record's). The
+    match's error (the record's and the twins' sampling error) is kept as
+    ``encoder_power_sd``.
     """
     real, se = turning_power(encoder, base.period_s)
     if not np.isfinite(real):
         return base
-    sims = [turning_power(simulate_twin(base, [], s)[1], base.period_s)[0] for s in seeds]
     adc = encoder_white_sigma(base, twin_config(base))
-    other = base.encoder_sigma ** 2 - adc ** 2
-    adc2 = max(adc ** 2 + real - float(np.mean(sims)), 0.0)
+    other = max(base.encoder_sigma ** 2 - adc ** 2, 0.0)
+    for _ in range(ENCODER_PASSES):
+        sims = [turning_power(simulate_twin(base, [], s)[1], base.period_s)[0] for s in seeds]
+        adc2 = max(adc ** 2 + real - float(np.mean(sims)), 0.0)
+        base = replace(base, encoder_sigma=float(np.sqrt(adc2 + other)))
+        adc = float(np.sqrt(adc2))
+        if abs(float(np.mean(sims)) - real) <= NEAR * real:
+            break
     sd = se * np.sqrt(1.0 + 1.0 / len(seeds)) if np.isfinite(se) else 0.0
-    return replace(base, encoder_sigma=float(np.sqrt(adc2 + max(other, 0.0))),
-                   encoder_power_sd=float(sd))
+    return replace(base, encoder_power_sd=float(sd))
 
 
 def calibration_shifts(base: SwingBaseline, ranges: dict,

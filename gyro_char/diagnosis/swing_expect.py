@@ -49,6 +49,7 @@ LINEAR = ('harm', 'scale')
 QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'acf')
 NOISE_SPAN_S = 240.0    # span of the jitter's runs (at most the record)
 JITTER_GRID = 8         # stamp errors run, log-spaced from 0.2 % to 45 % of the intervals
+SMOOTH_GRID = (0.05, 20.0)  # a smooth stamp error's grid, in intervals (``_unit``)
 LAG_GRID = (0.05, 20.0, 16)     # gyro lags run: from, to (gyro sample intervals), count
 
 
@@ -110,9 +111,11 @@ class EffectParts:
         self.cache: Dict[Tuple[int, str], dict] = {}
         self.clean: Dict[int, tuple] = {}
 
-    def _run(self, i: int, effects: list, span_s: float = 0.0, noisy: bool = False):
+    def _run(self, i: int, effects: list, span_s: float = 0.0, noisy: bool = False,
+             full: bool = False):
         b = self.bases[i]
-        cfg = (noise_config if noisy else clean_config)(self.config(b))
+        cfg = (self.config(b) if full else
+               (noise_config if noisy else clean_config)(self.config(b)))
         run = simulator.simulate_swing(cfg, seed=0,
                                        duration=min(span_s, b.duration) or span(b),
                                        effects=effects, channels=(f'gyro_{b.axis}',))
@@ -120,16 +123,19 @@ class EffectParts:
                         run.encoder.channels[ENCODER_CHANNEL], b.period_s)
         return res, self.scale(run.imu, run.encoder, b.axis)
 
-    def _single(self, i: int, effects: list, noise: bool, span_s: float = 0.0) -> dict:
-        key = (i, repr(effects) + f' {span_s}')
+    def _single(self, i: int, effects: list, noise: bool, span_s: float = 0.0,
+                full: bool = False) -> dict:
+        # ``full``: both runs with the twin's noise (one realisation, common to both), so
+        # that the part keeps the effect's interaction with that noise.
+        key = (i, repr(effects) + f' {span_s}' + (' full' if full else ''))
         if key not in self.cache:
             if len(self.cache) > 4096:
                 self.cache = {k: v for k, v in self.cache.items() if 'unit' in k[1]}
-            if (i, span_s) not in self.clean:
-                self.clean[(i, span_s)] = self._run(i, [], span_s)
-            res0, s0 = self.clean[(i, span_s)]
-            res, s = self._run(i, effects, span_s)
-            part = self._difference(i, res0, res, cross=not noise)
+            if (i, span_s, full) not in self.clean:
+                self.clean[(i, span_s, full)] = self._run(i, [], span_s, full=full)
+            res0, s0 = self.clean[(i, span_s, full)]
+            res, s = self._run(i, effects, span_s, full=full)
+            part = self._difference(i, res0, res, cross=full or not noise)
             part['scale'] = s - s0
             if noise:
                 part = self._as_noise(i, part, span_s)
@@ -204,18 +210,29 @@ class EffectParts:
         out['floor'] = {q: (1 - f) * lo['floor'][q] + f * hi['floor'][q] for q in lo['floor']}
         return out
 
-    def _grid(self, i: int, stream: float) -> np.ndarray:
+    def _grid(self, i: int, stream: float, order: float = 1.0) -> np.ndarray:
         b = self.bases[i]
         dts = [b.dt, b.encoder_dt] if stream == 2.0 else [b.dt if stream == 0.0 else
                                                           b.encoder_dt]
+        if order == 2.0:
+            return np.geomspace(SMOOTH_GRID[0] * min(dts), SMOOTH_GRID[1] * max(dts),
+                                JITTER_GRID)
         return np.geomspace(0.002 * min(dts), JITTER_CLIP * max(dts), JITTER_GRID)
 
-    def _unit(self, i: int, stream: float, k: int, tau: float = 0.0) -> dict:
-        # The jitter at grid point k over NOISE_SPAN_S, per unit stamp variance.
-        sigma = float(self._grid(i, stream)[k])
+    def _unit(self, i: int, stream: float, k: int, tau: float = 0.0,
+              order: float = 1.0) -> dict:
+        # The jitter at grid point k over NOISE_SPAN_S, per unit stamp variance. A smooth
+        # error (order 2) is run with the twin's noise: it moves the gyro stamps' phase in
+        # the encoder interval by whole intervals, and with it how the interpolation passes
+        # the encoder's noise on (the residual's increment correlation), which a noise-free
+        # run cannot show.
+        sigma = float(self._grid(i, stream, order)[k])
         extra = {'tau_s': tau} if tau else {}
+        if order == 2.0:
+            extra['order'] = 2.0
         part = self._single(i, [{'name': 'timestamp_jitter', 'params': {
-            'sigma_s': sigma, 'stream': stream, **extra}}], True, span_s=NOISE_SPAN_S)
+            'sigma_s': sigma, 'stream': stream, **extra}}], True, span_s=NOISE_SPAN_S,
+            full=order == 2.0)
         return {q: v / sigma ** 2 if q in QUADRATIC else v for q, v in part.items()}
 
     def _jitter(self, i: int, params: dict) -> dict:
@@ -229,11 +246,12 @@ class EffectParts:
         """
         sigma, stream = float(params['sigma_s']), float(params.get('stream', 2.0))
         tau = float(params.get('tau_s', 0.0))
-        grid = self._grid(i, stream)
+        order = float(params.get('order', 1.0)) if tau else 1.0
+        grid = self._grid(i, stream, order)
         x = float(np.clip(np.log(max(sigma, 1e-30)), np.log(grid[0]), np.log(grid[-1])))
         k = int(np.clip(np.searchsorted(np.log(grid), x) - 1, 0, grid.size - 2))
         f = (x - np.log(grid[k])) / (np.log(grid[k + 1]) - np.log(grid[k]))
-        lo, hi = self._unit(i, stream, k, tau), self._unit(i, stream, k + 1, tau)
+        lo, hi = (self._unit(i, stream, k, tau, order), self._unit(i, stream, k + 1, tau, order))
         return {q: (sigma ** 2 * ((1 - f) * lo[q] + f * hi[q]) if q in QUADRATIC else lo[q])
                 for q in lo}
 

@@ -10,7 +10,7 @@ from typing import Callable, List, Optional, Sequence
 
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_expect import LAG_GRID
+from gyro_char.diagnosis.swing_expect import LAG_GRID, SMOOTH_GRID
 import numpy as np
 
 G0 = 9.80665
@@ -63,10 +63,19 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         # Correlation time from 0.05 interval (white: phi = e^-20) to a tenth of a period,
         # searched from the white end: a wandering stamp error's angle error rate x e(t) is
         # coherent over tau_s, lines in the encoder residual rather than white noise.
+        # The alternative: a smooth error (``order`` 2), a clock offset slewed by a time-sync
+        # servo, from 5 % to 20 intervals (milliseconds at 1 kHz: not clipped, its steps are
+        # small), correlation times from a tenth of a period to a twentieth of the record.
         EffectSpace('timestamp_jitter', [
             Param('sigma_s', 0.002 * base.encoder_dt, 0.4 * base.encoder_dt),
             Param('tau_s', 0.05 * base.encoder_dt, 0.1 * base.period_s,
-                  init=0.05 * base.encoder_dt)], fixed={'stream': 2.0}),
+                  init=0.05 * base.encoder_dt)], fixed={'stream': 2.0},
+            alternatives=(EffectSpace('timestamp_jitter', [
+                Param('sigma_s', SMOOTH_GRID[0] * base.encoder_dt,
+                      SMOOTH_GRID[1] * base.encoder_dt),
+                Param('tau_s', 0.1 * base.period_s,
+                      max(0.05 * base.duration, 0.2 * base.period_s))],
+                fixed={'stream': 2.0, 'order': 2.0}),)),
     ]
 
 

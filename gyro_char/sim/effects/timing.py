@@ -5,7 +5,8 @@ The baseline's sampling jitter moves the *sample instants* (values and stamps ag
 effects move only the *stamps*, which is what a transport latency or a host-side stamp does.
 ``time_delay`` may put part of its latency inside the gyro instead (``lag_s``: a one-pole
 low-pass on the rate values, which also colours the noise); ``timestamp_jitter`` may be
-correlated in time (``tau_s``: a first-order Gauss-Markov stamp error).
+correlated in time (``tau_s``: a first-order Gauss-Markov stamp error, or with ``order`` 2 a
+smooth second-order one: a clock offset slewed by a time-sync servo).
 """
 from gyro_char.errors import InputError
 from gyro_char.sim.chain import JITTER_CLIP
@@ -46,6 +47,44 @@ class TimeDelay(Effect):
         return t + (self.delay_s - self.lag_s)
 
 
+# A correlated stamp error whose steps stay under this share of the sample interval (sd) is
+# slow: a clock offset wandering by milliseconds, not clipped in level (``increasing``).
+SLOW = 0.1
+
+
+def markov(w: np.ndarray, phi: float) -> np.ndarray:
+    """First-order Gauss-Markov of unit variance from white ``w``, started stationary."""
+    e = w.copy()
+    e[1:] *= np.sqrt(1.0 - phi * phi)
+    return signal.lfilter([1.0], [1.0, -phi], e)
+
+
+def smooth_markov(w: np.ndarray, phi: float, extra: float) -> np.ndarray:
+    """
+    Second-order Gauss-Markov of unit variance from white ``w``: ``w`` through the pole twice.
+
+    A clock servo slews the offset: it wanders without steps (PSD ~ f^-4 above 1 / (2 pi
+    tau)). Started from the stationary law (``extra``: one more unit normal draw): x1 of
+    variance v1 = 1 / (1 - phi^2), x2 given x1 with cov c = v1^2 and variance
+    v2 = (1 + phi^2) / (1 - phi^2)^3.
+    """
+    q = 1.0 - phi * phi
+    v1, c, v2 = 1.0 / q, 1.0 / q ** 2, (1.0 + phi * phi) / q ** 3
+    x1_0 = np.sqrt(v1) * w[0]
+    x2_0 = c / v1 * x1_0 + np.sqrt(max(v2 - c * c / v1, 0.0)) * extra
+    x1 = signal.lfilter([1.0], [1.0, -phi], w[1:], zi=[phi * x1_0])[0]
+    x2 = signal.lfilter([1.0], [1.0, -phi], x1, zi=[phi * x2_0])[0]
+    return np.concatenate([[x2_0], x2]) / np.sqrt(v2)
+
+
+def increasing(s: np.ndarray, floor: float) -> np.ndarray:
+    """Return stamps ``s`` with every step at least ``floor`` (a step that would go back)."""
+    d = np.diff(s)
+    if np.all(d >= floor):
+        return s
+    return s[0] + np.concatenate([[0.0], np.cumsum(np.maximum(d, floor))])
+
+
 @register
 class TimestampJitter(Effect):
     """Gaussian error on the stamps beyond the baseline sampling jitter: white or correlated."""
@@ -58,29 +97,42 @@ class TimestampJitter(Effect):
                'angle noise of variance (A 2 pi / T)^2 sigma^2 / 2. tau_s = 0: e white; '
                'tau_s > 0: a stationary first-order Gauss-Markov process of correlation time '
                'tau_s (a slowly wandering stamp error: its angle error is coherent over '
-               'tau_s and shows as lines in the encoder residual).')
+               'tau_s and shows as lines in the encoder residual). A slow error (steps of '
+               'sd at most 0.1 sample interval, e.g. a time-sync servo slewing the clock by '
+               'milliseconds) is not clipped in level; its stamps are kept increasing. '
+               'order = 2: the correlated error is second-order Gauss-Markov (the pole '
+               'twice): a clock offset that a servo slews without steps, PSD ~ f^-4.')
     PARAMS = {'sigma_s': (50.0e-6, 's', 'standard deviation of the stamp error'),
               'stream': (2.0, '-', '0: IMU, 1: encoder, 2: both'),
-              'tau_s': (0.0, 's', 'correlation time of the stamp error (0: white)')}
+              'tau_s': (0.0, 's', 'correlation time of the stamp error (0: white)'),
+              'order': (1.0, '-', 'with tau_s: 1 first-order Gauss-Markov, 2 smooth (second)')}
 
     def check(self):
-        if self.sigma_s < 0 or self.stream not in (0.0, 1.0, 2.0) or self.tau_s < 0:
-            raise InputError('timestamp_jitter: sigma_s >= 0, tau_s >= 0 and stream in 0, 1, 2')
+        if self.sigma_s < 0 or self.stream not in (0.0, 1.0, 2.0) or self.tau_s < 0 \
+                or self.order not in (1.0, 2.0):
+            raise InputError('timestamp_jitter: sigma_s >= 0, tau_s >= 0, stream in 0, 1, 2 '
+                             'and order 1 or 2')
 
     def describe(self):
-        return describe_without(self, 'tau_s')
+        out = describe_without(self, 'tau_s')
+        if self.order == 1.0:
+            del out['params']['order']
+        return out
 
     def _jitter(self, ctx, t, which):
         if self.stream not in (which, 2.0) or not self.sigma_s or t.size < 2:
             return t
-        lim = JITTER_CLIP * float(np.median(np.diff(t)))
-        e = self.sigma_s * ctx.rng(f'effect:{self.name}:{self.index}:{which}'
-                                   ).standard_normal(t.size)
+        dt = float(np.median(np.diff(t)))
+        lim = JITTER_CLIP * dt
+        rng = ctx.rng(f'effect:{self.name}:{self.index}:{which}')
+        e = rng.standard_normal(t.size)
         if self.tau_s:
-            # e[n] = phi e[n-1] + sqrt(1 - phi^2) w[n], started from its stationary law.
             phi = float(np.exp(-float(t[-1] - t[0]) / (t.size - 1) / self.tau_s))
-            e[1:] *= np.sqrt(1.0 - phi * phi)
-            e = signal.lfilter([1.0], [1.0, -phi], e)
+            e = (smooth_markov(e, phi, float(rng.standard_normal())) if self.order == 2.0
+                 else markov(e, phi))
+        e *= self.sigma_s
+        if self.tau_s and float(np.std(np.diff(e))) <= SLOW * dt:
+            return increasing(t + e, (1.0 - JITTER_CLIP) * dt)
         return t + np.clip(e, -lim, lim)
 
     def stamps(self, ctx, t):
