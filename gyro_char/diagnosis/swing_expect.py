@@ -78,7 +78,7 @@ def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
     Return the gyro noise power a lag candidate's twin restores: 1 / median |H|² of the bins.
 
     The baseline's N is pinned on the record's residual PSD by the median bin ratio against a
-    WHITE twin (``swing.calibrate_n``); a record whose gyro has the one-pole H reads N² times
+    WHITE twin (``swing_calibrate.calibrate_n``); a record whose gyro has the one-pole H reads N² times
     that median of |H|², so a twin that applies H must start from N² over it (measured: a
     5 ms lag left the twins' low PSD bins 17 % short without this).
     """
@@ -100,8 +100,8 @@ class EffectParts:
     """
     The effect part D of a candidate on each record, cached by the candidate's effects.
 
-    ``config(base)`` is the twin's simulator config (``swing.twin_config``), ``scale`` the
-    least-squares scale of a run (``swing.record_scale``).
+    ``config(base)`` is the twin's simulator config (``swing_twin.twin_config``), ``scale`` the
+    least-squares scale of a run (``swing_twin.record_scale``).
     """
 
     def __init__(self, bases: Sequence[SwingBaseline], ranges: Sequence[dict],

@@ -270,7 +270,7 @@ def unlocked_psd(res: Residuals, ranges: dict) -> np.ndarray:
     That mean (one bin per sample of a period, over all the periods) is what the motion and
     any effect locked to it leave every period alike; the rest is the sensors' noise, less
     1 / (number of periods) of its power, on record and twins alike. The baseline's N is
-    pinned on it (``swing.calibrate_n``): a sharp residual at every turning point (a dead
+    pinned on it (``swing_calibrate.calibrate_n``): a sharp residual at every turning point (a dead
     band) spreads over all Welch bins and would otherwise be read as gyro noise.
     """
     rate = np.diff(res.r) / res.dt
