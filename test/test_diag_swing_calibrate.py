@@ -1,10 +1,10 @@
 # The swing baseline's calibration against the record and the error it leaves in the twins.
 from dataclasses import replace
 
-from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing
-from gyro_char.diagnosis.swing_baseline import sample_interval
-from gyro_char.diagnosis.swing_calibrate import (calibration_shifts, turning_power,
-                                                 with_calibration_error)
+from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing, swing_calibrate
+from gyro_char.diagnosis.swing_baseline import fit_baseline, sample_interval
+from gyro_char.diagnosis.swing_calibrate import (calibrate_encoder, calibration_shifts,
+                                                 turning_power, with_calibration_error)
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 import numpy as np
@@ -71,3 +71,27 @@ def test_each_twin_carries_a_draw_of_the_calibration_error():
     # A baseline without calibration errors is left as simulated.
     bare = replace(base, encoder_power_sd=0.0, n_log_sd=0.0)
     assert calibration_shifts(bare, problem.ranges[0]) == []
+
+
+def test_the_encoder_level_is_found_again_after_a_far_first_guess(monkeypatch):
+    # A smooth 2 ms encoder stamp error (a servo-slewed clock): the filter's encoder noise
+    # lumps in rate x error, ~100 times the ADC noise. One step from there left the level at
+    # the first twins' sampling noise; the passes bring it to the clean run's level.
+    cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': 200.0},
+                                                'stand': {'period_s': 5.0}})
+    wander = [{'name': 'timestamp_jitter', 'params': {'sigma_s': 2e-3, 'tau_s': 2.0,
+                                                      'order': 2.0, 'stream': 1.0}}]
+    run = simulator.simulate_swing(cfg, duration=120.0, seed=8, channels=('gyro_x',),
+                                   effects=wander)
+    clean = _run(8, duration=120.0)
+    base = fit_baseline(run.imu, run.encoder, 5.0)
+    assert base.encoder_sigma > 30 * 5e-6
+    pinned = calibrate_encoder(base, run.encoder)
+    reference = calibrate_encoder(fit_baseline(clean.imu, clean.encoder, 5.0), clean.encoder)
+    assert pinned.encoder_sigma == pytest.approx(reference.encoder_sigma, rel=0.1)
+    # One pass only (the earlier calibration) is far off: the far twins' sampling noise is
+    # ~30 times the ADC power, so the ADC part comes out at 0 (the level of the other white
+    # terms alone, 20 % low here) or many times too high.
+    monkeypatch.setattr(swing_calibrate, 'ENCODER_PASSES', 1)
+    one = calibrate_encoder(base, run.encoder)
+    assert abs(one.encoder_sigma / reference.encoder_sigma - 1.0) > 0.15
