@@ -78,9 +78,9 @@ def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
     Return the gyro noise power a lag candidate's twin restores: 1 / median |H|² of the bins.
 
     The baseline's N is pinned on the record's residual PSD by the median bin ratio against a
-    WHITE twin (``swing_calibrate.calibrate_n``); a record whose gyro has the one-pole H reads N² times
-    that median of |H|², so a twin that applies H must start from N² over it (measured: a
-    5 ms lag left the twins' low PSD bins 17 % short without this).
+    WHITE twin (``swing_calibrate.calibrate_n``); a record whose gyro has the one-pole H reads
+    N² times that median of |H|², so a twin that applies H must start from N² over it
+    (measured: a 5 ms lag left the twins' low PSD bins 17 % short without this).
     """
     if not lag_s:
         return 1.0
