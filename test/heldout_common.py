@@ -1,5 +1,5 @@
 """
-What the held-out shape tests (sets C to F) share: the bench numbers and the set checks.
+What the held-out shape tests (sets C to N) share: the bench numbers and the set checks.
 
 Generators only, never the diagnosis: each set's own file checks its shapes' physics; here
 are the checks every set passes (names, edge levels at z ~ 4, finite output, both harnesses
@@ -16,6 +16,7 @@ N_ARW = 2.4 * np.pi / 180.0 / 60.0
 SIG = N_ARW / np.sqrt(DT)
 AMP, PERIOD = np.deg2rad(20.0), 5.0
 W = 2 * np.pi / PERIOD
+G0 = 9.80665
 INC = N_ARW * np.sqrt(DT)       # the static records' white-noise angle step per sample
 # sd of a fitted rate-residual sine on a 900 s swing run of the preset's gyro
 S_LINE = BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
@@ -51,11 +52,15 @@ def stand(t):
     return AMP * np.sin(W * t), AMP * W * np.cos(W * t)
 
 
-def fold_lines(err, kmax=60):
-    """Norm of lines 2..kmax of ``err`` folded over the 5 s swing period (1 kHz samples)."""
+def fold_lines(err, kmax=60, kmin=2):
+    """Norm of lines kmin..kmax of ``err`` folded over the 5 s swing period (1 kHz samples)."""
     m = 5000
     mean = err[:err.size // m * m].reshape(-1, m).mean(axis=0)
-    return float(2 * np.linalg.norm(np.fft.rfft(mean)[2:kmax + 1] / m))
+    return float(2 * np.linalg.norm(np.fft.rfft(mean)[kmin:kmax + 1] / m))
+
+
+def rng(seed):
+    return np.random.default_rng(seed)
 
 
 def noisy_run(seed=13):

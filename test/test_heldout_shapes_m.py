@@ -3,7 +3,7 @@
 # claim, and both harnesses reach them by --held-out m. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            N_ARW, S_LINE, SIG, swing, W)
+                            fold_lines, G0, N_ARW, rng, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
@@ -12,18 +12,6 @@ STATIC = bench_script.load('validate_diagnosis_heldout_m')
 SWING = bench_script.load('validate_diagnosis_swing_heldout_m')
 SHAPES = STATIC.shapes(DT, SIG, N_ARW)
 SWING_SHAPES = SWING.shapes(1000.0)
-G0 = 9.80665
-
-
-def rng(seed):
-    return np.random.default_rng(seed)
-
-
-def lines(err, kmin, kmax=60):
-    """Norm of lines kmin..kmax of ``err`` folded over the 5 s swing period (1 kHz)."""
-    m = 5000
-    mean = err[:err.size // m * m].reshape(-1, m).mean(axis=0)
-    return float(2 * np.linalg.norm(np.fft.rfft(mean)[kmin:kmax + 1] / m))
 
 
 def line(y, t, f):
@@ -243,7 +231,7 @@ def test_coarse_compensation_leaves_a_zero_mean_sawtooth_in_specific_force():
     assert abs(np.polyfit(f_y, err, 1)[0]) < 0.05 * gy              # no net g-sensitivity
     jumps = np.sum(np.abs(np.diff(err)) > 0.5 * gy * step)
     assert jumps == pytest.approx(12 * 12, abs=2)                  # six edges a half swing
-    assert lines(err, 1) / S_LINE == pytest.approx(
+    assert fold_lines(err, kmin=1) / S_LINE == pytest.approx(
         SWING.detectability('g_sensitivity', levels[1]), rel=0.02)
 
 
@@ -263,7 +251,7 @@ def test_torquer_hysteresis_is_a_play_loop_on_the_true_rate():
     both = held[1:] & held[:-1]
     assert np.mean(held) > 0.1 and np.all(np.abs(np.diff(loop)[both]) < 1e-12)
     err = (g - rate)[t >= 5]
-    assert lines(err, 2) / S_LINE == pytest.approx(
+    assert fold_lines(err, kmin=2) / S_LINE == pytest.approx(
         SWING.detectability('scale_factor_nonlinearity', levels[1]), rel=0.02)
     spec = np.abs(np.fft.rfft(err[:50000].reshape(-1, 5000).mean(axis=0)))
     assert np.max(spec[2:40:2]) < 1e-6 * np.max(spec[3:40:2])        # odd lines only

@@ -3,7 +3,7 @@
 # claim, and both harnesses reach them by --held-out n. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            N_ARW, noisy_run, S_LINE, SIG, swing, W)
+                            fold_lines, G0, N_ARW, noisy_run, rng, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -12,18 +12,6 @@ STATIC = bench_script.load('validate_diagnosis_heldout_n')
 SWING = bench_script.load('validate_diagnosis_swing_heldout_n')
 SHAPES = STATIC.shapes(DT, SIG, N_ARW)
 SWING_SHAPES = SWING.shapes(1000.0)
-G0 = 9.80665
-
-
-def rng(seed):
-    return np.random.default_rng(seed)
-
-
-def lines(err, kmin, kmax=60):
-    """Norm of lines kmin..kmax of ``err`` folded over the 5 s swing period (1 kHz)."""
-    m = 5000
-    mean = err[:err.size // m * m].reshape(-1, m).mean(axis=0)
-    return float(2 * np.linalg.norm(np.fft.rfft(mean)[kmin:kmax + 1] / m))
 
 
 def acf(y, lags):
@@ -236,7 +224,7 @@ def test_stiction_is_a_relay_with_hysteresis_on_specific_force():
     assert not np.any(on[mid & rising]) and np.all(on[mid & ~rising])   # late release
     starts = np.sum(np.diff(on.astype(int)) == 1)
     assert starts == pytest.approx(24, abs=1)                       # once a half swing
-    assert lines(err, 1) / S_LINE == pytest.approx(
+    assert fold_lines(err, kmin=1) / S_LINE == pytest.approx(
         SWING.detectability('g_sensitivity', levels[1]), rel=0.02)
 
 
@@ -255,7 +243,7 @@ def test_table_residual_is_parabolic_arches_between_knots():
     p = levels[1]
     _, out, _, _ = fn(t, gyro.copy(), t, t, None, rng(1), **p)
     assert np.allclose(out - gyro, SWING.table_residual(gyro, p['k3']))
-    assert lines(out - gyro, 2) / S_LINE == pytest.approx(
+    assert fold_lines(out - gyro, kmin=2) / S_LINE == pytest.approx(
         SWING.detectability('scale_factor_nonlinearity', p), rel=0.1)
 
 
@@ -271,7 +259,7 @@ def test_diode_leak_is_one_sided_and_exponential():
     _, out, _, _ = fn(t, gyro.copy(), t, t, None, rng(1), **p)
     err = out - gyro
     assert np.allclose(err, p['c'] * (np.expm1(gyro / w) - gyro / w))
-    assert lines(err, 2) / S_LINE == pytest.approx(
+    assert fold_lines(err, kmin=2) / S_LINE == pytest.approx(
         SWING.detectability('scale_factor_asymmetry', p), rel=0.05)
     m = err[:900000 // 5000 * 5000].reshape(-1, 5000).mean(axis=0)
     spec = np.abs(np.fft.rfft(m))
