@@ -62,6 +62,16 @@ LSB = 0.05 * np.pi / 180.0                  # 0.05 deg/s output step
 SIG = N_ARW / np.sqrt(DT)                   # per-sample white noise, rad/s
 
 
+HELD_OUT = 'validate_diagnosis_heldout'
+
+
+def held_out_letters() -> list:
+    """Return the held-out sets present beside this harness: a (no suffix), b, c, ..."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    stems = [f[:-3] for f in os.listdir(here) if f.startswith(HELD_OUT) and f.endswith('.py')]
+    return sorted('a' if s == HELD_OUT else s[len(HELD_OUT) + 1:] for s in stems)
+
+
 def clean(n: int, rng) -> np.ndarray:
     return SIG * rng.standard_normal(n) + 0.003
 
@@ -218,24 +228,11 @@ def main(argv=None) -> int:
     ap.add_argument('--clean', type=int, default=0, metavar='K',
                     help=f'K more clean records, seeds {CLEAN_SEED0}.. (the clean record of a '
                          'seed is the same in every shape set: false alarms need many)')
-    ap.add_argument('--held-out', nargs='?', const='a',
-                    choices=('a', 'b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm',
-                             'n'),
+    ap.add_argument('--held-out', nargs='?', const='a', choices=held_out_letters(),
                     default=None,
                     help='a held-out shape set, no pairs: a = validate_diagnosis_heldout.py '
                          '(used once in session 3), b = validate_diagnosis_heldout_b.py, '
-                         'c = validate_diagnosis_heldout_c.py, '
-                         'd = validate_diagnosis_heldout_d.py, '
-                         'e = validate_diagnosis_heldout_e.py, '
-                         'f = validate_diagnosis_heldout_f.py, '
-                         'g = validate_diagnosis_heldout_g.py, '
-                         'h = validate_diagnosis_heldout_h.py, '
-                         'i = validate_diagnosis_heldout_i.py, '
-                         'j = validate_diagnosis_heldout_j.py, '
-                         'k = validate_diagnosis_heldout_k.py, '
-                         'l = validate_diagnosis_heldout_l.py, '
-                         'm = validate_diagnosis_heldout_m.py, '
-                         'n = validate_diagnosis_heldout_n.py')
+                         'and so on')
     ap.add_argument('--only', nargs='+', default=None, metavar='NAME',
                     help='only these shapes (and no pairs, no clean records)')
     ap.add_argument('--repeats', type=int, default=None,
@@ -256,12 +253,7 @@ def main(argv=None) -> int:
     shapes = SHAPES
     if args.held_out:
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-        module = 'validate_diagnosis_heldout' + {'a': '', 'b': '_b', 'c': '_c',
-                                                 'd': '_d', 'e': '_e', 'f': '_f',
-                                                 'g': '_g', 'h': '_h',
-                                                 'i': '_i', 'j': '_j',
-                                                 'k': '_k', 'l': '_l',
-                                                 'm': '_m', 'n': '_n'}[args.held_out]
+        module = HELD_OUT + ('' if args.held_out == 'a' else f'_{args.held_out}')
         shapes = importlib.import_module(module).shapes(DT, SIG, N_ARW)
     todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out,
                  clean_extra=args.clean)

@@ -181,6 +181,13 @@ def shapes(rate_hz: float) -> dict:
 SHAPES = shapes(RATE_HZ)
 
 
+def held_out_letters() -> list:
+    """Return the held-out sets present beside this harness: b (no suffix), c, d, ..."""
+    here = Path(__file__).resolve().parent
+    return sorted(('b' if p.stem == HELD_OUT else p.stem[len(HELD_OUT) + 1:])
+                  for p in here.glob(f'{HELD_OUT}*.py'))
+
+
 def held_out_shapes(rate_hz: float, which: str = 'b') -> dict:
     """Return held-out set ``which``'s ``shapes(rate_hz)``; exit clearly when it is absent."""
     here = Path(__file__).resolve().parent
@@ -267,17 +274,10 @@ def main(argv=None) -> int:
     ap.add_argument('--rate', type=float, default=RATE_HZ, help='gyro rate, Hz (1000)')
     ap.add_argument('--encoder-rate', type=float, default=ENCODER_RATE_HZ,
                     help='encoder rate, Hz (1000)')
-    ap.add_argument('--held-out', nargs='?', const='b',
-                    choices=('b', 'c', 'd', 'e', 'f', 'g', 'h', 'i', 'j', 'k', 'l', 'm', 'n'),
+    ap.add_argument('--held-out', nargs='?', const='b', choices=held_out_letters(),
                     default=None,
                     help=f'a held-out set instead of the shapes here: b (the flag alone) = '
-                         f'bench/{HELD_OUT}.py, c = bench/{HELD_OUT}_c.py, '
-                         f'd = bench/{HELD_OUT}_d.py, e = bench/{HELD_OUT}_e.py, '
-                         f'f = bench/{HELD_OUT}_f.py, g = bench/{HELD_OUT}_g.py, '
-                         f'h = bench/{HELD_OUT}_h.py, i = bench/{HELD_OUT}_i.py, '
-                         f'j = bench/{HELD_OUT}_j.py, k = bench/{HELD_OUT}_k.py, '
-                         f'l = bench/{HELD_OUT}_l.py, m = bench/{HELD_OUT}_m.py, '
-                         f'n = bench/{HELD_OUT}_n.py')
+                         f'bench/{HELD_OUT}.py, c = bench/{HELD_OUT}_c.py, and so on')
     args = ap.parse_args(argv)
     shape_set = (held_out_shapes(args.rate, args.held_out) if args.held_out
                  else shapes(args.rate))
