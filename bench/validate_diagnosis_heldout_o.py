@@ -26,7 +26,7 @@ the kinds of departure differ from shape to shape:
 - bias_instability: an envelope detector's flicker: the amplitude detector of the sense
   pick-off responds to the magnitude of the quadrature signal, |I + iQ|, whose in-phase and
   quadrature parts carry independent 1/f noise (Gaussian sums of sixteen first-order
-  processes, three per decade, 0.05 s-2e4 s, unit variance each); the magnitude leaks into the
+  processes, three per decade, 0.05-5000 s, unit variance each); the magnitude leaks into the
   rate: b (R - sqrt(pi / 2)) / sqrt(2 - pi / 2), R the Rayleigh envelope: sd b, skewed (skew
   0.63), bounded below, autocovariance b^2 (pi / 2) (2F1(-1/2, -1/2; 1; rho^2) - 1) /
   (2 - pi / 2);
@@ -70,13 +70,13 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
 - loaded mount: the record's mean PSD (the mean over the sweep of the instantaneous mode's),
   its mean excess over white in the band above half its peak, times sqrt(T B).
 Edges are set at z ~ 4; weak and strong are several to hundreds of times further in z.
-Physical scale: follower fall times of 2 ms (edge), 20 and 100 ms; coast-downs of 0.00055,
-0.0057 and 0.057 deg/s peak at 30 Hz; melting plateaus at 0.4 A of 0.00098, 0.0057 and 0.057
-deg/s (A 0.0024-0.14 deg/s, 0.18-11 degC at 0.0135 (deg/s)/degC); envelope flicker of 21, 72
-and 290 deg/h sd; walks of K 1.5e-6, 6e-6 and 3e-5 rad/s/sqrt(s) (LSBs of 0.00087-0.017
-deg/s); gated convection of 0.012, 0.057 and 0.14 deg/s sd while on (tc 2 s, 2 s and 20 s);
-log codes of 2.8 (edge), 1 and 0.5 per octave (relative error sd 7 %, 20 % and 40 %); loaded
-mounts of 0.017, 0.069 and 0.34 deg/s sd.
+Physical scale: follower fall times of 2.15 ms (edge), 20 and 100 ms; coast-downs of 0.0042,
+0.029 and 0.17 deg/s peak at 30 Hz; phase-change sinks of A 0.0069, 0.057 and 0.29 deg/s
+(plateaus at 0.4 A; 0.51, 4.2 and 21 degC at 0.0135 (deg/s)/degC); envelope flicker of 30, 72
+and 290 deg/h sd; walks of K 2.0e-6, 6e-6 and 3e-5 rad/s/sqrt(s) (LSBs of 0.0012, 0.0034 and
+0.017 deg/s); gated convection of 0.018, 0.057 and 0.14 deg/s sd while on (tc 2 s, 2 s and 20
+s); log codes of 3.2 (edge), 1 and 0.5 per octave (relative error sd 6 %, 20 % and 43 %); loaded
+mounts of 0.025, 0.069 and 0.34 deg/s sd.
 """
 import math
 

@@ -7,11 +7,12 @@ Same interface as ``validate_diagnosis_swing_heldout_n.py``: ``shapes(rate_hz)``
 is unlike the catalogue's, the development harness's and sets B-N, and the kinds of departure
 differ from shape to shape:
 
-- time_delay: interleaving skew: the gyro's converter is two time-interleaved channels, even
-  samples from one and odd from the other, and the odd channel's sampling clock runs d early,
-  so every other rate value is the motion at t - d: a mean delay d / 2 and a delay that
-  alternates from sample to sample (an image of the motion at the Nyquist frequency), the
-  noise untouched;
+- time_delay: interleaving skew: the gyro's converter is two time-interleaved channels, each
+  converting at half the output rate, even samples from one and odd from the other, and the
+  odd channel's trigger is set d early (a phase-register error; d may exceed the output period,
+  the odd stream then older than the even sample before it), so every other rate value is the
+  motion at t - d: a mean delay d / 2 and a delay that alternates from sample to sample (an
+  image of the motion at the Nyquist frequency), the noise untouched;
 - g_sensitivity: a wandering quadrature leak: tilt bends the sense frame and adds a quadrature
   signal q_g f_y (f_y = g sin(phi)); the demodulator's phase error, calibrated to zero on
   average but wandering with the drive loop's temperature (a unit first-order Gauss-Markov
@@ -27,11 +28,12 @@ differ from shape to shape:
   rebalance current (the true rate) is negative the gain fluctuates: out = w + e_k w 1(w < 0),
   e_k white of sd eps: no mean error at all, a rate-proportional noise on one direction only
   (heteroscedastic, zero-mean);
-- timestamp_jitter: a stepping clock daemon: the host's clock is stepped (not slewed) to each
-  new offset measurement, at Poisson times of mean 4 s, and each measurement errs by an
-  independent Gaussian of sd sigma (clipped at +-0.45 ms): the encoder stamps' error is
-  piecewise constant with jumps, a kangaroo process, two-sided PSD sigma^2 2 tau /
-  (1 + (2 pi f tau)^2), tau = 4 s;
+- timestamp_jitter: a stepping clock: the host's clock is a PTP slave that steps (does not
+  slew) to each new offset measurement, taken from sync messages that reach it over a busy
+  network at Poisson times of mean 0.1 s, and each measurement errs by an independent Gaussian
+  of sd sigma (clipped at +-0.45 ms, so that the stamps stay in order): the encoder stamps'
+  error is piecewise constant with jumps, a kangaroo process, two-sided PSD sigma^2 2 tau /
+  (1 + (2 pi f tau)^2), tau = 0.1 s;
 - encoder_cyclic_error: coupling backlash: the encoder shaft is driven from the stand through a
   coupling with a play of +-b, so it lags the stand by b in the direction of motion and, after
   each reversal, stays put until the stand has moved 2 b: a play operator, the encoder's error
@@ -46,21 +48,21 @@ N sqrt(f_s) the gyro's per-sample noise):
   out, against the gyro angle noise N^2 / (2 pi f)^2, the encoder's white floor and the
   preset's stamp jitter;
 - quadrature leak: a quadratic detector on the added angle noise: the rate error's two-sided
-  PSD c^2 sum_k a_k^2 / 4 (S_u(f - k f0) + S_u(f + k f0)) (a_k the lines of f_y, S_u = 2 tc /
-  (1 + (2 pi f tc)^2)) over (2 pi f)^2;
-- overflow: lines k = 2..60 of the wrap error averaged over the gyro's noise, exactly
-  2 R (Phi((-R - w) / s_n) - Phi((w - R) / s_n)), in quadrature, against s;
+  PSD c^2 g^2 sum_k a_k^2 / 4 (S_u(f - k f0) + S_u(f + k f0)) (a_k the lines of f_y / g, S_u =
+  2 tc / (1 + (2 pi f tc)^2)) over (2 pi f)^2;
+- overflow: lines k = 2..60 of the wrap error averaged over the gyro's noise, exactly (one
+  wrap at most) 2 R (Phi((-R - w) / s_n) - Phi((w - R) / s_n)), in quadrature, against s;
 - noisy half: the optimal variance detector sum over w < 0 of w^2 (r^2 - s_n^2): z = eps^2 (A
   w)^2 sqrt(3 n / 32) / s_n^2 (n samples, half of them on the negative side, E[w^4] = 3 (A
   w)^4 / 8);
-- stepping daemon: the stamp error read through the swing's rate (``stamp_z``, as sets E and
+- stepping clock: the stamp error read through the swing's rate (``stamp_z``, as sets E and
   K-N).
 Edges are at z ~ 4 at the 5 s period; weak and strong are several to hundreds of times
-further in z. Physical scale: interleaving skews of 9 us (edge), 100 us and 0.5 ms; leaks c
-of 1.1e-4, 5e-4 and 2e-3 (rad/s)/(m/s^2) sd (0.021, 0.096 and 0.38 deg/s at the swing's end);
-overflow ranges R of 0.52, 0.48 and 0.40 rad/s (30, 28 and 23 deg/s; the swing's peak 25.1
-deg/s); gain noises of 0.46 %, 2 % and 8 % sd; clock-step errors of 9, 40 and 150 us sd;
-backlashes of 13, 60 and 300 arcsec.
+further in z. Physical scale: interleaving skews of 0.27 ms (edge), 1.5 and 5 ms; leaks c of
+4.3e-5, 2e-4 and 1e-3 (rad/s)/(m/s^2) sd (0.0082, 0.038 and 0.19 deg/s at the swing's end);
+overflow ranges R of 0.498, 0.48 and 0.40 rad/s (28.5, 27.5 and 22.9 deg/s; the swing's peak
+25.1 deg/s); gain noises of 0.47 %, 2 % and 8 % sd; clock-step errors of 36, 100 and 200 us sd
+(the strong level's clip trims 2.4 % of its steps); backlashes of 0.82, 12 and 210 arcsec.
 """
 from heldout_detect import encoder_floor, matched_z, quadratic_z, stamp_z, swing_scales
 import numpy as np
