@@ -2,6 +2,7 @@
 # the package catalogue does not have (Hann FIR, amplitude-modulated tone, white angle error),
 # not announced to the diagnosis; a clean baseline record must raise no effect.
 import bench_script
+import pytest
 
 
 def _harness():
@@ -52,3 +53,13 @@ def test_extra_clean_records_come_at_their_own_seeds_before_the_shapes():
     clean = [c for c in todo if not c[1]]
     assert [c[2] for c in clean] == [11, 12, h.CLEAN_SEED0, h.CLEAN_SEED0 + 1]
     assert todo[:4] == clean and len(todo) == 4 + 2 * len(h.SHAPES)
+
+
+def test_held_out_sets_are_found_from_their_files(capsys):
+    h = _harness()
+    letters = h.held_out_letters()
+    assert letters[0] == 'a' and {'n', 'o'} <= set(letters)       # a = the unsuffixed file
+    with pytest.raises(SystemExit) as exc:
+        h.main(['--held-out', 'zz'])
+    assert exc.value.code == 2
+    assert "invalid choice: 'zz'" in capsys.readouterr().err

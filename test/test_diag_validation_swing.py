@@ -83,11 +83,16 @@ def test_every_shape_has_one_signature_and_three_levels_the_edge_weakest():
         assert outs[2] < outs[0] < outs[1], (name, outs)
 
 
-def test_held_out_without_its_file_says_so(monkeypatch):
+def test_held_out_without_its_file_says_so(monkeypatch, capsys):
     h = _harness()
+    assert {'b', 'n', 'o'} <= set(h.held_out_letters())       # found from the files
+    with pytest.raises(SystemExit):
+        h.main(['--held-out', 'zz', '--quick'])
+    assert "invalid choice: 'zz'" in capsys.readouterr().err
     monkeypatch.setattr(h, 'HELD_OUT', 'no_such_heldout_file')
+    assert h.held_out_letters() == []
     with pytest.raises(SystemExit, match='no no_such_heldout_file.py'):
-        h.main(['--held-out', '--quick'])
+        h.held_out_shapes(1000.0, 'b')
 
 
 def test_extra_clean_runs_have_their_own_seeds_and_clean_only_drops_the_shapes():
