@@ -59,6 +59,13 @@ def fold_lines(err, kmax=60, kmin=2):
     return float(2 * np.linalg.norm(np.fft.rfft(mean)[kmin:kmax + 1] / m))
 
 
+def load_set(letter):
+    """Return set ``letter``'s static and swing modules and their shapes at the bench numbers."""
+    static = bench_script.load(f'validate_diagnosis_heldout_{letter}')
+    swing = bench_script.load(f'validate_diagnosis_swing_heldout_{letter}')
+    return static, swing, static.shapes(DT, SIG, N_ARW), swing.shapes(1000.0)
+
+
 def rng(seed):
     return np.random.default_rng(seed)
 

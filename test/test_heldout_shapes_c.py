@@ -2,17 +2,13 @@
 # bench/validate_diagnosis_swing_heldout_c.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out c. THE GENERATORS only, never the diagnosis.
 # (A file of its own: test_heldout_shapes.py, which checks set B, would pass the 420-line limit.)
-import bench_script
-from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, flicker_band_psd, N_ARW, SIG, stand, swing, W)
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
+                            flicker_band_psd, load_set, N_ARW, SIG, stand, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_c')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_c')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('c')
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

@@ -1,19 +1,15 @@
 # Held-out set D (bench/validate_diagnosis_heldout_d.py, static, and
 # bench/validate_diagnosis_swing_heldout_d.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out d. THE GENERATORS only, never the diagnosis.
-import bench_script
 from gyro_char.allan.expected import markov_avar
 from gyro_char.sim.config import BenchConfig
-from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, flicker_band_psd, N_ARW, SIG, stand, swing, W)
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
+                            flicker_band_psd, load_set, N_ARW, SIG, stand, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_d')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_d')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('d')
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

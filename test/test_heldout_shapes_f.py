@@ -1,17 +1,13 @@
 # Held-out set F (bench/validate_diagnosis_heldout_f.py, static, and
 # bench/validate_diagnosis_swing_heldout_f.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out f. THE GENERATORS only, never the diagnosis.
-import bench_script
-from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, INC, N_ARW, S_LINE, SIG, stand, swing, W)
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
+                            INC, load_set, N_ARW, S_LINE, SIG, stand, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_f')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_f')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('f')
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

@@ -1,17 +1,13 @@
 # Held-out set H (bench/validate_diagnosis_heldout_h.py, static, and
 # bench/validate_diagnosis_swing_heldout_h.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out h. THE GENERATORS only, never the diagnosis.
-import bench_script
-from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fit, N_ARW, S_LINE, SIG, swing, W)
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
+                            load_set, N_ARW, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_h')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_h')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('h')
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

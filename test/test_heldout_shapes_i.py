@@ -1,17 +1,14 @@
 # Held-out set I (bench/validate_diagnosis_heldout_i.py, static, and
 # bench/validate_diagnosis_swing_heldout_i.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out i. THE GENERATORS only, never the diagnosis.
-import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
-                            flicker_band_psd, N_ARW, octave_ratios, S_LINE, SIG, swing, W)
+                            flicker_band_psd, load_set, N_ARW, octave_ratios, S_LINE, SIG, swing,
+                            W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_i')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_i')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('i')
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

@@ -1,18 +1,14 @@
 # Held-out set J (bench/validate_diagnosis_heldout_j.py, static, and
 # bench/validate_diagnosis_swing_heldout_j.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out j. THE GENERATORS only, never the diagnosis.
-import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
-                            flicker_band_psd, fold_lines, N_ARW, noisy_run, octave_ratios, S_LINE,
-                            SIG, swing, W)
+                            flicker_band_psd, fold_lines, load_set, N_ARW, noisy_run,
+                            octave_ratios, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_j')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_j')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('j')
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

@@ -1,18 +1,14 @@
 # Held-out set K (bench/validate_diagnosis_heldout_k.py, static, and
 # bench/validate_diagnosis_swing_heldout_k.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out k. THE GENERATORS only, never the diagnosis.
-import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT, fit,
-                            flicker_band_psd, fold_lines, G0, N_ARW, noisy_run, octave_ratios, rng,
-                            S_LINE, SIG, swing, W)
+                            flicker_band_psd, fold_lines, G0, load_set, N_ARW, noisy_run,
+                            octave_ratios, rng, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import integrate, signal, special, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_k')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_k')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('k')
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

@@ -1,17 +1,13 @@
 # Held-out set M (bench/validate_diagnosis_heldout_m.py, static, and
 # bench/validate_diagnosis_swing_heldout_m.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out m. THE GENERATORS only, never the diagnosis.
-import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fold_lines, G0, N_ARW, rng, S_LINE, SIG, swing, W)
+                            fold_lines, G0, load_set, N_ARW, rng, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, special, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_m')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_m')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('m')
 
 
 def line(y, t, f):

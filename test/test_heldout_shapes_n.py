@@ -1,17 +1,13 @@
 # Held-out set N (bench/validate_diagnosis_heldout_n.py, static, and
 # bench/validate_diagnosis_swing_heldout_n.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out n. THE GENERATORS only, never the diagnosis.
-import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fold_lines, G0, N_ARW, noisy_run, rng, S_LINE, SIG, swing, W)
+                            fold_lines, G0, load_set, N_ARW, noisy_run, rng, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_n')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_n')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('n')
 
 
 def acf(y, lags):

@@ -1,17 +1,13 @@
 # Held-out set O (bench/validate_diagnosis_heldout_o.py, static, and
 # bench/validate_diagnosis_swing_heldout_o.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out o. THE GENERATORS only, never the diagnosis.
-import bench_script
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            fold_lines, G0, N_ARW, noisy_run, rng, S_LINE, SIG, swing, W)
+                            fold_lines, G0, load_set, N_ARW, noisy_run, rng, S_LINE, SIG, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
 
-STATIC = bench_script.load('validate_diagnosis_heldout_o')
-SWING = bench_script.load('validate_diagnosis_swing_heldout_o')
-SHAPES = STATIC.shapes(DT, SIG, N_ARW)
-SWING_SHAPES = SWING.shapes(1000.0)
+STATIC, SWING, SHAPES, SWING_SHAPES = load_set('o')
 
 
 def acf(y, lags):
