@@ -4,7 +4,7 @@ from gyro_char.errors import InputError
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 from gyro_char.sim.effects import EFFECTS
-from gyro_char.sim.effects.sensor import second_order_gm
+from gyro_char.sim.effects.base import second_order_gm
 import numpy as np
 import pytest
 
@@ -20,7 +20,8 @@ def _quiet_config(n_arw: float = 1e-9) -> BenchConfig:
 def test_second_order_gm_is_stationary_from_the_first_sample():
     rng = np.random.default_rng(3)
     a = 0.8
-    draws = np.array([second_order_gm(a, rng.standard_normal(40), rng) for _ in range(20000)])
+    draws = np.array([second_order_gm(a, rng.standard_normal(40), rng.standard_normal(2))
+                      for _ in range(20000)])
     var = draws.var(axis=0)
     assert np.all(np.abs(var[[0, 1, 20, 39]] - 1.0) < 0.04)
     # AR(2) with a double root a: rho_1 = 2 a / (1 + a^2), rho_2 = 2 rho_1 a - a^2

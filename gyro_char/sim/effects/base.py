@@ -149,6 +149,37 @@ class Effect:
 EFFECTS: Dict[str, type] = {}
 
 
+def markov(w: np.ndarray, a: float) -> np.ndarray:
+    """
+    Return a unit-variance first-order Gauss-Markov series (pole ``a``) from white ``w``.
+
+    x_k = a x_(k-1) + sqrt(1 - a^2) w_k, started from the stationary law (x_0 = w_0).
+    """
+    e = np.array(w, dtype=np.float64)
+    e[1:] *= np.sqrt(1.0 - a * a)
+    return signal.lfilter([1.0], [1.0, -a], e)
+
+
+def second_order_gm(a: float, w: np.ndarray, start) -> np.ndarray:
+    """
+    Return unit-variance s2 of s1_k = a s1_(k-1) + w_k, s2_k = a s2_(k-1) + s1_k, stationary.
+
+    The pole twice: a process that wanders without steps (PSD ~ f^-4 above its corner). The
+    initial state (s1_0, s2_0) is drawn from the cascade's stationary covariance (discrete
+    Lyapunov equation of A = [[a, 0], [a, a]], Q = [[1, 1], [1, 1]]: P11 = 1 / q, P12 = 1 / q^2,
+    P22 = (1 + a^2) / q^3, q = 1 - a^2) through its Cholesky factor, written out so that it
+    stays exact for correlation times far longer than the record; ``start`` holds the two unit
+    normal draws, ``w[1:]`` drives the cascade (``w[0]`` is not used).
+    """
+    q = 1.0 - a * a
+    z0, z1 = float(start[0]), float(start[1])
+    s1_0 = z0 / np.sqrt(q)
+    s2_0 = (z0 + a * z1) / q ** 1.5
+    s1 = signal.lfilter([1.0], [1.0, -a], w[1:], zi=[a * s1_0])[0]
+    s2 = signal.lfilter([1.0], [1.0, -a], s1, zi=[a * s2_0])[0]
+    return np.r_[s2_0, s2] / np.sqrt((1.0 + a * a) / q ** 3)
+
+
 def one_pole(x: np.ndarray, lag_s: float, dt: float, start: str = 'first') -> np.ndarray:
     """
     First-order lag of time constant ``lag_s`` along the last axis, started in steady state.

@@ -11,8 +11,8 @@ from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
-from gyro_char.sim.effects.base import (axis_param, axis_rows, describe_without, Effect, register,
-                                        transient_terms)
+from gyro_char.sim.effects.base import (axis_param, axis_rows, describe_without, Effect, markov,
+                                        register, second_order_gm, transient_terms)
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
@@ -231,31 +231,10 @@ class GaussMarkov(Effect):
         for r in axis_rows(self):
             w = rng.standard_normal(n)
             if int(self.order) == 2:
-                gyro[r] += self.sigma * second_order_gm(a, w, rng)
+                gyro[r] += self.sigma * second_order_gm(a, w, rng.standard_normal(2))
                 continue
-            w[0] /= np.sqrt(1.0 - a * a)     # stationary start
-            x = signal.lfilter([1.0], [1.0, -a], w)
-            gyro[r] += self.sigma * np.sqrt(1.0 - a * a) * x
+            gyro[r] += self.sigma * markov(w, a)
         return gyro, accel
-
-
-def second_order_gm(a: float, w: np.ndarray, rng) -> np.ndarray:
-    """
-    Return unit-variance s2 of s1_k = a s1_(k-1) + w_k, s2_k = a s2_(k-1) + s1_k, stationary.
-
-    The initial state (s1_0, s2_0) is drawn from the cascade's stationary covariance (discrete
-    Lyapunov equation of A = [[a, 0], [a, a]], Q = [[1, 1], [1, 1]]), so no burn-in is needed
-    even for correlation times longer than the record.
-    """
-    v1 = 1.0 / (1.0 - a * a)
-    # P11 = v1, P12 = (a^2 v1 + 1) / (1 - a^2) = v1^2, P22 = (1 + a^2) / (1 - a^2)^3.
-    c12 = v1 * v1
-    v2 = v1 * v1 * v1 * (1.0 + a * a)
-    chol = np.linalg.cholesky(np.array([[v1, c12], [c12, v2]]))
-    s0 = chol @ rng.standard_normal(2)
-    s1 = signal.lfilter([1.0], [1.0, -a], w[1:], zi=[a * s0[0]])[0]
-    s2 = signal.lfilter([1.0], [1.0, -a], s1, zi=[a * s0[1]])[0]
-    return np.r_[s0[1], s2] / np.sqrt(v2)
 
 
 @register

@@ -10,9 +10,9 @@ smooth second-order one: a clock offset slewed by a time-sync servo).
 """
 from gyro_char.errors import InputError
 from gyro_char.sim.chain import JITTER_CLIP
-from gyro_char.sim.effects.base import describe_without, Effect, one_pole, register
+from gyro_char.sim.effects.base import (describe_without, Effect, markov, one_pole, register,
+                                        second_order_gm)
 import numpy as np
-from scipy import signal
 
 
 @register
@@ -50,31 +50,6 @@ class TimeDelay(Effect):
 # A correlated stamp error whose steps stay under this share of the sample interval (sd) is
 # slow: a clock offset wandering by milliseconds, not clipped in level (``increasing``).
 SLOW = 0.1
-
-
-def markov(w: np.ndarray, phi: float) -> np.ndarray:
-    """First-order Gauss-Markov of unit variance from white ``w``, started stationary."""
-    e = w.copy()
-    e[1:] *= np.sqrt(1.0 - phi * phi)
-    return signal.lfilter([1.0], [1.0, -phi], e)
-
-
-def smooth_markov(w: np.ndarray, phi: float, extra: float) -> np.ndarray:
-    """
-    Second-order Gauss-Markov of unit variance from white ``w``: ``w`` through the pole twice.
-
-    A clock servo slews the offset: it wanders without steps (PSD ~ f^-4 above 1 / (2 pi
-    tau)). Started from the stationary law (``extra``: one more unit normal draw): x1 of
-    variance v1 = 1 / (1 - phi^2), x2 given x1 with cov c = v1^2 and variance
-    v2 = (1 + phi^2) / (1 - phi^2)^3.
-    """
-    q = 1.0 - phi * phi
-    v1, c, v2 = 1.0 / q, 1.0 / q ** 2, (1.0 + phi * phi) / q ** 3
-    x1_0 = np.sqrt(v1) * w[0]
-    x2_0 = c / v1 * x1_0 + np.sqrt(max(v2 - c * c / v1, 0.0)) * extra
-    x1 = signal.lfilter([1.0], [1.0, -phi], w[1:], zi=[phi * x1_0])[0]
-    x2 = signal.lfilter([1.0], [1.0, -phi], x1, zi=[phi * x2_0])[0]
-    return np.concatenate([[x2_0], x2]) / np.sqrt(v2)
 
 
 def increasing(s: np.ndarray, floor: float) -> np.ndarray:
@@ -128,7 +103,7 @@ class TimestampJitter(Effect):
         e = rng.standard_normal(t.size)
         if self.tau_s:
             phi = float(np.exp(-float(t[-1] - t[0]) / (t.size - 1) / self.tau_s))
-            e = (smooth_markov(e, phi, float(rng.standard_normal())) if self.order == 2.0
+            e = (second_order_gm(phi, e, (e[0], rng.standard_normal())) if self.order == 2.0
                  else markov(e, phi))
         e *= self.sigma_s
         if self.tau_s and float(np.std(np.diff(e))) <= SLOW * dt:
