@@ -10,7 +10,7 @@ from dataclasses import replace
 from typing import Callable, Dict, List, Sequence, Tuple
 
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_obs import unlocked_psd
+from gyro_char.diagnosis.swing_obs import solve_columns, unlocked_psd
 from gyro_char.diagnosis.swing_twin import (
     encoder_white_sigma, record_observables, record_residuals, simulate_twin, twin_config)
 from gyro_char.records import ENCODER_CHANNEL, Recording
@@ -86,9 +86,9 @@ def turning_power(encoder: Recording, period_s: float) -> Tuple[float, float]:
     e = encoder.channels[ENCODER_CHANNEL]
     w = 2.0 * np.pi / period_s
     ts = t / max(t[-1], 1e-9)
-    a = np.array([np.sin(w * t), np.cos(w * t), np.ones_like(t), ts, ts * ts])
-    coef = np.linalg.solve(np.einsum('ik,jk->ij', a, a), np.einsum('ik,k->i', a, e))
-    r = e - coef @ a
+    a = [np.sin(w * t), np.cos(w * t), np.ones_like(t), ts, ts * ts]
+    coef = solve_columns(a, e)
+    r = e - coef @ np.array(a)
     slow = np.abs(np.cos(w * t + np.arctan2(coef[1], coef[0]))) < TURNING_COS
     idx = np.flatnonzero(slow[1:] & slow[:-1])
     if idx.size < 16:
@@ -124,11 +124,12 @@ def calibrate_encoder(base: SwingBaseline, encoder: Recording,
     adc = encoder_white_sigma(base, twin_config(base))
     other = max(base.encoder_sigma ** 2 - adc ** 2, 0.0)
     for _ in range(ENCODER_PASSES):
-        sims = [turning_power(simulate_twin(base, [], s)[1], base.period_s)[0] for s in seeds]
-        adc2 = max(adc ** 2 + real - float(np.mean(sims)), 0.0)
+        sim = float(np.mean([turning_power(simulate_twin(base, [], s)[1], base.period_s)[0]
+                             for s in seeds]))
+        adc2 = max(adc ** 2 + real - sim, 0.0)
         base = replace(base, encoder_sigma=float(np.sqrt(adc2 + other)))
         adc = float(np.sqrt(adc2))
-        if abs(float(np.mean(sims)) - real) <= NEAR * real:
+        if abs(sim - real) <= NEAR * real:
             break
     sd = se * np.sqrt(1.0 + 1.0 / len(seeds)) if np.isfinite(se) else 0.0
     return replace(base, encoder_power_sd=float(sd))

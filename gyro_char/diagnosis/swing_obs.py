@@ -72,9 +72,13 @@ class SwingObs(dict):
     line_peaks: np.ndarray = np.array([])
 
 
-def _solve(cols: List[np.ndarray], y: np.ndarray) -> np.ndarray:
-    # Normal equations with einsum (a threaded BLAS lstsq is slow on a busy 2-core machine);
-    # columns are scaled to unit rms so the 7x7 system stays well conditioned.
+def solve_columns(cols: List[np.ndarray], y: np.ndarray) -> np.ndarray:
+    """
+    Return the least-squares coefficients of ``y`` on the columns ``cols`` (a few, long).
+
+    Normal equations with einsum (a threaded BLAS lstsq is slow on a busy 2-core machine);
+    columns are scaled to unit rms so that the small system stays well conditioned.
+    """
     a = np.array(cols)
     s = np.sqrt(np.einsum('ij,ij->i', a, a) / y.size)
     s[s == 0] = 1.0
@@ -240,9 +244,9 @@ def residuals(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarra
     span = max(tau[-1], 1e-9)
     ts = tau / span
     one = np.ones_like(tau)
-    ce = _solve([np.sin(w * tau), np.cos(w * tau), one, ts, ts * ts], e)
+    ce = solve_columns([np.sin(w * tau), np.cos(w * tau), one, ts, ts * ts], e)
     psi = float(np.arctan2(ce[1], ce[0]))
-    k = _solve([e, one, ts, ts * ts], ang)
+    k = solve_columns([e, one, ts, ts * ts], ang)
     r = ang - k[0] * e - (k[1] + k[2] * ts + k[3] * ts * ts)
     # The same fit on the encoder stamps inside the gyro span.
     me = (t_e >= lo + tau[0]) & (t_e <= lo + tau[-1])
@@ -296,8 +300,8 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     r = res.r if r is None else r
     r_e = res.r_e if r_e is None else r_e
     th, ts = res.th, res.ts
-    h = _solve([np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
-                np.cos(3 * th), np.ones_like(ts), ts, ts * ts], r)
+    h = solve_columns([np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th),
+                       np.sin(3 * th), np.cos(3 * th), np.ones_like(ts), ts, ts * ts], r)
     psd = band_psd(np.diff(r) / res.dt, res.dt, ranges)
     # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
     # large, deterministic, and the harmonic blocks' business - must not pass for noise here.

@@ -9,7 +9,7 @@ from typing import Sequence
 
 from gyro_char.diagnosis.swing_baseline import PRESET, SwingBaseline
 from gyro_char.diagnosis.swing_expect import lag_gain
-from gyro_char.diagnosis.swing_obs import residuals, swing_observables
+from gyro_char.diagnosis.swing_obs import residuals, solve_columns, swing_observables
 from gyro_char.diagnosis.twins import twin_effects
 from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim import simulator
@@ -100,6 +100,5 @@ def record_scale(imu: Recording, encoder: Recording, axis: str) -> float:
     ang = integrate(tau, imu.channels[f'gyro_{axis}'][m])
     e = np.interp(tau, t_e - lo, encoder.channels[ENCODER_CHANNEL])
     ts = tau / max(tau[-1], 1e-9)
-    a = np.array([e - e.mean(), np.ones_like(ts), ts - 0.5, ts * ts - 1.0 / 3.0])
-    coef = np.linalg.solve(np.einsum('ik,jk->ij', a, a), np.einsum('ik,k->i', a, ang))
+    coef = solve_columns([e - e.mean(), np.ones_like(ts), ts - 0.5, ts * ts - 1.0 / 3.0], ang)
     return float(coef[0] - 1.0)
