@@ -53,6 +53,7 @@ import sys
 import time
 
 from gyro_char.diagnosis import engine as diagnose, static as diag_static, static_expect
+import heldout_sets
 import numpy as np
 from scipy import signal
 
@@ -67,9 +68,7 @@ HELD_OUT = 'validate_diagnosis_heldout'
 
 def held_out_letters() -> list:
     """Return the held-out sets present beside this harness: a (no suffix), b, c, ..."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    stems = [f[:-3] for f in os.listdir(here) if f.startswith(HELD_OUT) and f.endswith('.py')]
-    return sorted('a' if s == HELD_OUT else s[len(HELD_OUT) + 1:] for s in stems)
+    return heldout_sets.letters(HELD_OUT, 'a')
 
 
 def clean(n: int, rng) -> np.ndarray:
@@ -253,7 +252,7 @@ def main(argv=None) -> int:
     shapes = SHAPES
     if args.held_out:
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-        module = HELD_OUT + ('' if args.held_out == 'a' else f'_{args.held_out}')
+        module = heldout_sets.module(HELD_OUT, args.held_out, 'a')
         shapes = importlib.import_module(module).shapes(DT, SIG, N_ARW)
     todo = cases(args.quick, args.seeds, args.levels, shapes, pairs=not args.held_out,
                  clean_extra=args.clean)

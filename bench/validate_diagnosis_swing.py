@@ -74,6 +74,7 @@ from gyro_char.diagnosis import engine as diagnose, swing as diag_swing
 from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
+import heldout_sets
 import numpy as np
 from scipy import signal
 
@@ -183,15 +184,13 @@ SHAPES = shapes(RATE_HZ)
 
 def held_out_letters() -> list:
     """Return the held-out sets present beside this harness: b (no suffix), c, d, ..."""
-    here = Path(__file__).resolve().parent
-    return sorted(('b' if p.stem == HELD_OUT else p.stem[len(HELD_OUT) + 1:])
-                  for p in here.glob(f'{HELD_OUT}*.py'))
+    return heldout_sets.letters(HELD_OUT, 'b')
 
 
 def held_out_shapes(rate_hz: float, which: str = 'b') -> dict:
     """Return held-out set ``which``'s ``shapes(rate_hz)``; exit clearly when it is absent."""
     here = Path(__file__).resolve().parent
-    module = HELD_OUT + ('' if which == 'b' else f'_{which}')
+    module = heldout_sets.module(HELD_OUT, which, 'b')
     if not (here / f'{module}.py').exists():
         raise SystemExit(f'--held-out: no {module}.py in {here} (the held-out shapes are '
                          'written apart from this harness)')
