@@ -34,7 +34,7 @@ error's 2x, the jitter's ~6x, the g x g term's the same:
   z^2 = sum over harmonics of a_k^2 (k L)^2 T (A w)^2 / (4 N^2).
 Edges are at z ~ 4; weak and strong are 5-50x further.
 """
-from gyro_char.sim.effects.sensor import second_order_gm
+from gyro_char.sim.effects.base import second_order_gm
 from heldout_detect import encoder_floor, stamp_z, swing_scales
 import numpy as np
 from scipy import signal, special
@@ -70,7 +70,7 @@ def shapes(rate_hz: float) -> dict:
     def wander(imu_t, gyro, enc_t, enc, stand, rng, sigma_s):
         step = float(np.median(np.diff(enc_t)))
         e = sigma_s * second_order_gm(np.exp(-step / JITTER_TC), rng.standard_normal(enc_t.size),
-                                      rng)
+                                      rng.standard_normal(2))
         return imu_t, gyro, np.maximum.accumulate(enc_t + e), enc
 
     def cyclic(imu_t, gyro, enc_t, enc, stand, rng, a2):
