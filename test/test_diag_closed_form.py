@@ -41,6 +41,13 @@ CASES = {
     'resonance': [('resonance', {'sigma': 5e-3, 'freq_hz': 19.9, 'q': 25.0}), LOWPASS],
     'temperature_pulse': [('temperature_drift', {'amplitude': 3e-3, 'tau_s': 12.0,
                                                  'rise_s': 3.0, 't0_s': 50.0}), LOWPASS],
+    'stale_samples': [('stale_samples', {'p': 0.15})],
+    # Holds on everything at once: smoothing, a correlated process, a tone (partly turned
+    # into broadband noise), the output step's rounding.
+    'stale_samples_mixed': [LOWPASS, ('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.2,
+                                                       'order': 1.0}),
+                            ('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}),
+                            ('stale_samples', {'p': 0.3})],
 }
 
 

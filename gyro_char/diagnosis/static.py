@@ -18,6 +18,7 @@ from typing import List, Optional, Sequence
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.spectra import hold_gain
 from gyro_char.diagnosis.starts import markov_start
 from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
@@ -30,7 +31,7 @@ import numpy as np
 # Effects a static record can reveal. (scale-factor, cross-axis, g-sensitivity, time delay and
 # encoder effects need motion or an encoder; a static record cannot tell them from bias.)
 STATIC_EFFECTS = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gauss_markov',
-                  'quantization', 'temperature_drift', 'vibration', 'resonance')
+                  'quantization', 'temperature_drift', 'vibration', 'resonance', 'stale_samples')
 TAU_REF = 1.0  # s, where N is read off the Allan curve
 NUISANCE = 'baseline_white_noise'  # pseudo-effect: scale on the baseline N, tuned per model
 PRESET = 'adis16405'  # only its structure is used: every number that matters is overridden
@@ -79,13 +80,16 @@ def twin_config(base: StaticBaseline, channel: str, effects: Sequence = ()) -> B
     Return the bench simulator's config for a twin: the paper's static model only.
 
     With ``internal_lowpass`` the chain runs at the internal rate and decimates; the white
-    noise there is scaled so that the long-τ N at the output is still the baseline's N.
+    noise there is scaled so that the long-τ N at the output is still the baseline's N (so
+    it is with ``stale_samples``, whose holds raise a white noise's long-τ level).
     """
     gain = 1.0
     for name, params in effects:
         if name == 'internal_lowpass':
             lp = EFFECTS[name](**params)
             gain *= lp.noise_gain(int(lp.decimation))
+        elif name == 'stale_samples':
+            gain *= hold_gain(params['p'])
     axis = AXES[channel_row(channel)]
     overrides = {
         'gyro': {'static_rate_hz': 1.0 / base.dt, 'output_step': base.lsb,
@@ -244,6 +248,9 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
                                      lines, levels),
         'resonance': resonance_space(sig_sample, f_tone, dt, obs.broad_peak(psd)),
+        # Holds: from a lag-1 correlation a few times its standard error 1 / sqrt(n) up to
+        # one sample in two.
+        'stale_samples': EffectSpace('stale_samples', [Param('p', 1.0 / np.sqrt(n), 0.5)]),
     }
     return [spaces[k] for k in names]
 

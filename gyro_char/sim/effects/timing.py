@@ -1,5 +1,6 @@
 """
-Timing effects: ``time_delay`` and ``timestamp_jitter`` (stamps differ from sample instants).
+Timing effects: ``time_delay``, ``timestamp_jitter`` (stamps differ from sample instants) and
+``stale_samples`` (a sample repeated under a new stamp).
 
 The baseline's sampling jitter moves the *sample instants* (values and stamps agree); these
 effects move only the *stamps*, which is what a transport latency or a host-side stamp does.
@@ -115,3 +116,30 @@ class TimestampJitter(Effect):
 
     def encoder_stamps(self, ctx, t):
         return self._jitter(ctx, t, 1.0)
+
+
+@register
+class StaleSamples(Effect):
+    """The driver republishes the previous sample now and then: values held, stamps new."""
+
+    name = 'stale_samples'
+    summary = 'output samples that repeat the previous one (a driver reading a stale register)'
+    physics = ('Each output sample (gyro and accelerometer together) is, with probability p '
+               'and independently of the others, the previous sample repeated under a new '
+               'stamp: a host loop that reads the sensor slightly faster than it updates, a '
+               'DMA race. The sample it replaces is lost. On white rate noise this is a '
+               'first-order correlation of exactly p^|m| at lag m, with the variance kept: '
+               'the PSD tilts up by (1 + p) / (1 - p) at low frequency and down by the inverse '
+               'at Nyquist; on a swing run the holds average to a delay of p dt.')
+    PARAMS = {'p': (0.05, '-', 'probability that a sample repeats the previous one')}
+
+    def check(self):
+        if not 0.0 <= self.p < 1.0:
+            raise InputError('stale_samples: p in [0, 1)')
+
+    def output(self, ctx, gyro, accel):
+        n = gyro.shape[1]
+        held = self.rng(ctx).random(n) < self.p
+        held[0] = False
+        src = np.maximum.accumulate(np.where(held, 0, np.arange(n)))
+        return gyro[:, src], accel[:, src]
