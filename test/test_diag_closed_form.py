@@ -135,6 +135,20 @@ def test_closed_form_diagnosis_names_smoothing_and_warm_up_on_a_simulated_record
         assert 0.5 < c['rms_residual'] < 1.6, (block, c)
 
 
+def test_closed_form_diagnosis_names_stale_samples_and_leaves_a_clean_record_alone():
+    n = 2 ** 17
+    for p, seed in ((0.03, 5), (0.0, 7)):
+        truth = [('stale_samples', {'p': p})] if p else []
+        x = static.simulate_twin(BASE, n, truth, seed)
+        d = run(static_expect.closed_form_problem([x], DT, twins=6, seed=2), repeats=6, seed=2)
+        if p:
+            assert d.selected_effects == ['stale_samples']
+            assert dict(d.model)['stale_samples']['p'] == pytest.approx(p, rel=0.15)
+            assert d.final_gap < d.null_gap['final_model_q95'] < 0.5 * d.baseline_gap
+        else:
+            assert d.selected_effects == []
+
+
 def test_two_records_and_a_holdout_at_full_length_through_the_command(tmp_path):
     import json
     from gyro_char.cli import main

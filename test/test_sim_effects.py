@@ -15,7 +15,7 @@ CATALOGUE = {
     'rate_random_walk', 'gauss_markov', 'quantization', 'temperature_drift',
     'scale_factor_nonlinearity', 'scale_factor_asymmetry', 'cross_axis', 'g_sensitivity',
     'vibration', 'resonance', 'encoder_cyclic_error'}
-# Names the project added beyond the contract's list (documented in docs/effects.md).
+# Names the project added beyond the contract's list (docs/design.md, the catalogue).
 EXTENSIONS = {'stale_samples'}
 
 
@@ -59,6 +59,23 @@ def test_effect_leaves_the_baseline_noise_of_the_seed_unchanged():
     diff = tone.imu.channels['gyro_y'] - base.imu.channels['gyro_y']
     assert np.allclose(np.abs(diff).max(), 0.01, rtol=1e-3)
     assert np.array_equal(tone.imu.channels['gyro_x'], base.imu.channels['gyro_x'])
+
+
+def test_stale_samples_repeat_a_share_p_with_correlation_p_to_the_lag_and_new_stamps():
+    cfg = _quiet(100.0, 1e-3)
+    clean = simulate_static(cfg, duration=2000.0, seed=5, channels=['gyro_x'])
+    run = simulate_static(cfg, duration=2000.0, seed=5, effects=['stale_samples:p=0.2'],
+                          channels=['gyro_x'])
+    x, x0 = run.imu.channels['gyro_x'], clean.imu.channels['gyro_x']
+    held = x[1:] == x[:-1]
+    assert held.mean() == pytest.approx(0.2, abs=0.01)
+    # Every sample is a clean one, from the same or an earlier instant; the stamps are new.
+    assert np.array_equal(x[1:][~held], x0[1:][~held])
+    assert np.array_equal(run.imu.t, clean.imu.t)
+    for lag in (1, 2, 3):
+        got = np.corrcoef(x[:-lag], x[lag:])[0, 1]
+        assert got == pytest.approx(0.2 ** lag, abs=0.01), lag
+    assert x.var() == pytest.approx(x0.var(), rel=0.03)
 
 
 @pytest.mark.parametrize('taps,stages,dec', [(4, 2, 2), (16, 2, 8), (8, 1, 8), (3, 1, 1)])

@@ -49,6 +49,13 @@ SEPARATING_RUNS = {
     frozenset({'vibration', 'gauss_markov'}):
         'a longer record with finer frequency resolution: a tone keeps a constant width, a '
         'resonant process does not',
+    frozenset({'stale_samples', 'internal_lowpass'}):
+        'the raw record at a finer output step (or logged before the driver): a hold repeats '
+        'a sample exactly, so equal neighbours far above the rounding’s own share are holds; '
+        'a smoothing filter never repeats one',
+    frozenset({'stale_samples', 'gauss_markov'}):
+        'the raw record at a finer output step (or logged before the driver): equal neighbours '
+        'far above the rounding’s own share are holds; a correlated process has none',
 }
 DEFAULT_SEPARATING_RUN = ('a record that differs in the one condition the two effects react to '
                           'differently (sample rate, length, temperature or excitation)')

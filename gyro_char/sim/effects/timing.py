@@ -1,6 +1,7 @@
 """
-Timing effects: ``time_delay``, ``timestamp_jitter`` (stamps differ from sample instants) and
-``stale_samples`` (a sample repeated under a new stamp).
+Timing effects: stamps that differ from sample instants, samples repeated under new stamps.
+
+``time_delay`` and ``timestamp_jitter`` move the stamps; ``stale_samples`` repeats a sample.
 
 The baseline's sampling jitter moves the *sample instants* (values and stamps agree); these
 effects move only the *stamps*, which is what a transport latency or a host-side stamp does.
