@@ -23,7 +23,10 @@ generator:
 - quantization: a white angle error uniform on one step, differenced into rate (catalogue: a
   floor quantizer of the accumulated angle);
 - resonance: white noise through two identical resonators in cascade, a fourth-order band
-  (catalogue: one second-order resonator).
+  (catalogue: one second-order resonator);
+- stale_samples: a host loop reading the sensor a share e faster than it updates, with a
+  jittered read instant: regularly spaced repeats and no lost sample (catalogue: independent
+  holds, each replacing a sample).
 
 A second set of shapes, ``validate_diagnosis_heldout.py``, was fixed before the closed-form
 diagnosis was tuned and is run only with ``--held-out`` (once, at the end of a development
@@ -139,6 +142,13 @@ def band4(x, rng, sigma, freq, q):
     return x + sigma * y / np.std(y)
 
 
+def host_reads(x, rng, e):
+    """Read x by a host loop (1 + e) times faster than it updates, read instants jittered."""
+    j = np.arange(x.size)
+    idx = np.maximum.accumulate(np.floor(j / (1.0 + e) + rng.uniform(0.0, 0.3, x.size)))
+    return x[np.minimum(idx.astype(int), x.size - 1)]
+
+
 # name -> (generator, [magnitude parameter sets, weaker first])
 SHAPES = {
     'internal_lowpass': (hann_lowpass, [{'length': 3}, {'length': 5}, {'length': 1}]),
@@ -159,6 +169,7 @@ SHAPES = {
     'resonance': (band4, [{'sigma': 0.3 * SIG, 'freq': 17.0, 'q': 15.0},
                           {'sigma': SIG, 'freq': 23.0, 'q': 8.0},
                           {'sigma': 0.08 * SIG, 'freq': 17.0, 'q': 15.0}]),
+    'stale_samples': (host_reads, [{'e': 0.03}, {'e': 0.1}, {'e': 0.008}]),
 }
 # Shapes scored as another catalogue effect (the truth label is the effect family's name).
 LABELS = {'bias_instability_band': 'bias_instability'}

@@ -48,6 +48,10 @@ CASES = {
                                                        'order': 1.0}),
                             ('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}),
                             ('stale_samples', {'p': 0.3})],
+    'stale_samples_isolated': [LOWPASS, ('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.2,
+                                                          'order': 1.0}),
+                               ('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}),
+                               ('stale_samples', {'p': 0.3, 'isolated': 1.0})],
 }
 
 

@@ -76,6 +76,15 @@ def test_stale_samples_repeat_a_share_p_with_correlation_p_to_the_lag_and_new_st
         got = np.corrcoef(x[:-lag], x[lag:])[0, 1]
         assert got == pytest.approx(0.2 ** lag, abs=0.01), lag
     assert x.var() == pytest.approx(x0.var(), rel=0.03)
+    # Isolated holds: the same share, never two in a row, correlated at lag 1 only.
+    run = simulate_static(cfg, duration=2000.0, seed=5, channels=['gyro_x'],
+                          effects=['stale_samples:p=0.2,isolated=1'])
+    x = run.imu.channels['gyro_x']
+    held = x[1:] == x[:-1]
+    assert held.mean() == pytest.approx(0.2, abs=0.01)
+    assert not np.any(held[1:] & held[:-1])
+    assert [np.corrcoef(x[:-k], x[k:])[0, 1] for k in (1, 2, 3)] == pytest.approx(
+        [0.2, 0.0, 0.0], abs=0.01)
 
 
 @pytest.mark.parametrize('taps,stages,dec', [(4, 2, 2), (16, 2, 8), (8, 1, 8), (3, 1, 1)])

@@ -10,9 +10,9 @@ stage has an exact discrete-time PSD, so the twin's output PSD is
     S_out(f) = sum_r |H(f + r fs)|^2 S_int(f + r fs) + S_q(f) + S_lsb(f),   r = 0..D-1
 
 (decimation folds the D images of the internal band; two-sided, per Hz). Tones are lines,
-folded the same way; a warm-up is a deterministic mean term. Stale samples (``hold``: each
-output sample repeats the previous one with probability p) act last, on the whole output
-(``hold_spectrum``). ``ModelSpectrum`` holds the result
+folded the same way; a warm-up is a deterministic mean term. Stale samples (an output sample
+repeating the previous one) act last, on the whole output (``holds.Holds``). ``ModelSpectrum``
+holds the result
 for one model; every observable's expectation is a linear functional of it
 (``gyro_char.diagnosis.expected``). The output step is taken as white rounding noise
 (lsb^2 / 12 per sample), exact enough when the per-sample noise exceeds half a step.
@@ -23,6 +23,7 @@ import threading
 from typing import Callable, List, Optional, Sequence, Tuple
 
 from gyro_char.allan.expected import moving_average_kernel
+from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines
 import numpy as np
@@ -30,7 +31,6 @@ import numpy as np
 # Effects whose static output has a closed form here.
 CLOSED_FORM = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gauss_markov',
                'quantization', 'temperature_drift', 'vibration', 'resonance', 'stale_samples')
-HOLD_GRID = 1 << 14      # points of the variance integral behind the holds' white share
 
 
 # Every internal PSD is a function of s2 = sin^2(pi f dt_i) (cos 2 pi f dt_i = 1 - 2 s2), so
@@ -118,9 +118,9 @@ class ModelSpectrum:
     # (amplitude, tau_s, t0_s): a transient from power-on (t0 0) or from mid-record.
     warmups: List[Tuple[float, float, float]] = field(default_factory=list)
     peaks: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, width) to resolve
-    hold: float = 0.0                    # probability that an output sample is the last one
-    line_loss: float = 0.0               # line power the holds turn into broadband noise
-    _hold_share: dict = field(default_factory=dict, repr=False)
+    holds: Optional[Holds] = None        # stale samples; ``lines`` are then the held ones
+    unheld_lines: List[Tuple[float, float]] = field(default_factory=list)
+    _hold_terms: dict = field(default_factory=dict, repr=False)
 
     def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
         """``nu`` (cycles per output sample, sorted) with dense points across every peak."""
@@ -196,21 +196,15 @@ class ModelSpectrum:
         map is linear); the lines' lost power joins the total (``parts`` None) only.
         """
         f = np.ascontiguousarray(f, dtype=np.float64)
-        if not self.hold:
+        if self.holds is None:
             return self._unheld(f, parts)
         key = None if parts is None else tuple(parts)
-        if key not in self._hold_share:
-            self._hold_share[key] = self._lost_variance(parts) + (
-                self.line_loss if parts is None else 0.0)
-        g2, ar1 = hold_shapes(self.hold, f, self.dt)
-        return g2 * self._unheld(f, parts) + self._hold_share[key] * ar1
-
-    def _lost_variance(self, parts) -> float:
-        """Return the variance the holds' averaging removes: the integral of S (1 - |G|^2)."""
-        nu = self.refine(np.linspace(0.5 / HOLD_GRID, 0.5, HOLD_GRID))
-        f = nu / self.dt
-        g2, _ = hold_shapes(self.hold, f, self.dt)
-        return float(np.trapezoid(self._unheld(f, parts) * (1.0 - g2), f))
+        if key not in self._hold_terms:
+            grid = self.refine(np.linspace(0.5 / GRID, 0.5, GRID)) / self.dt
+            self._hold_terms[key] = self.holds.terms(
+                grid, self._unheld(grid, parts), self.unheld_lines if parts is None else (),
+                self.dt)
+        return self.holds.apply(f, self._unheld(f, parts), self._hold_terms[key], self.dt)
 
     def _unheld(self, f: np.ndarray, parts) -> np.ndarray:
         total = np.zeros_like(f)
@@ -246,26 +240,6 @@ class ModelSpectrum:
         return amp * np.exp(-since / tau)
 
 
-def hold_shapes(p: float, f, dt: float):
-    """
-    Return |G|^2 and the unit-variance one-sided AR(1) PSD of holds with probability ``p``.
-
-    A held output is x'_k = x_(k-D_k), D_k the run of holds ending at k (geometric,
-    g(d) = (1 - p) p^d). For k and k + m the sources coincide with probability p^|m| (every
-    sample between held), otherwise their lags are independent draws of D; hence exactly
-    R'(m) = (g * g~ * R)(m) + p^|m| (R(0) - R_G(0)), i.e. S' = |G|^2 S + (lost variance) x
-    AR(1; p), G(z) = (1 - p) / (1 - p z^-1). On white noise: S' = AR(1; p) with the variance kept.
-    """
-    s = np.sin(np.pi * np.asarray(f, dtype=np.float64) * dt)
-    den = (1.0 - p) ** 2 + 4.0 * p * s * s
-    return (1.0 - p) ** 2 / den, 2.0 * (1.0 - p * p) * dt / den
-
-
-def hold_gain(p: float) -> float:
-    """Return the long-τ gain of holds on white noise, sqrt((1 + p) / (1 - p)) in N."""
-    return float(np.sqrt((1.0 + p) / (1.0 - p)))
-
-
 def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> ModelSpectrum:
     """
     Return the output spectrum of a static twin: white rate noise N, output step, ``effects``.
@@ -274,16 +248,17 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
     the filter's and the holds' long-tau gains so that the output keeps N). Raises ValueError
     for an effect without a closed form (a motion or encoder effect).
     """
-    decim, taps, stages, hold = 1, 1, 1, 0.0
+    decim, taps, stages, holds = 1, 1, 1, None
     for name, p in effects:
         if name == 'internal_lowpass':
             decim = max(decim, int(p.get('decimation', 1.0)))
             taps, stages = int(p['taps']), int(p.get('stages', 2.0))
         elif name == 'stale_samples':
-            hold = float(p['p'])
+            holds = Holds(float(p['p']), bool(p.get('isolated', 0.0)))
     h = moving_average_kernel(taps, stages)
     gain = float(np.sqrt(decim * np.sum([h[r::decim].sum() ** 2 for r in range(decim)])))
-    gain *= hold_gain(hold)
+    if holds is not None:
+        gain *= holds.gain()
     dt_i = dt / decim
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,
                          white_int=(n_white / gain) ** 2,
@@ -307,13 +282,8 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
         elif name == 'temperature_drift':
             for c, lag in transient_terms(p['amplitude'], p['tau_s'], p.get('rise_s', 0.0)):
                 spec.warmups.append((c, lag, p.get('t0_s', 0.0)))
-    if hold:
+    if holds is not None:
         # Warm-ups pass unchanged (a hold shifts a slow mean by p dt / (1 - p) of its slope).
-        spec.hold = hold
-        if spec.lines:
-            f0 = np.array([f for f, _ in spec.lines])
-            power = np.array([a for _, a in spec.lines])
-            g2 = hold_shapes(hold, f0, dt)[0]
-            spec.line_loss = float(np.sum(power * (1.0 - g2)))
-            spec.lines = list(zip(f0.tolist(), (power * g2).tolist()))
+        spec.holds, spec.unheld_lines = holds, list(spec.lines)
+        spec.lines = [(f0, a * float(holds.g2(f0, dt))) for f0, a in spec.lines]
     return spec

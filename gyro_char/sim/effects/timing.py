@@ -125,22 +125,33 @@ class StaleSamples(Effect):
 
     name = 'stale_samples'
     summary = 'output samples that repeat the previous one (a driver reading a stale register)'
-    physics = ('Each output sample (gyro and accelerometer together) is, with probability p '
-               'and independently of the others, the previous sample repeated under a new '
-               'stamp: a host loop that reads the sensor slightly faster than it updates, a '
-               'DMA race. The sample it replaces is lost. On white rate noise this is a '
-               'first-order correlation of exactly p^|m| at lag m, with the variance kept: '
-               'the PSD tilts up by (1 + p) / (1 - p) at low frequency and down by the inverse '
-               'at Nyquist; on a swing run the holds average to a delay of p dt.')
-    PARAMS = {'p': (0.05, '-', 'probability that a sample repeats the previous one')}
+    physics = ('Each output sample (gyro and accelerometer together) is, with probability p, '
+               'the previous sample repeated under a new stamp: a host loop that reads the '
+               'sensor slightly faster than it updates, a DMA race. The sample it replaces is '
+               'lost. Holds are independent (runs of several possible), or with isolated = 1 '
+               'never two in a row (a read loop a little faster than the sensor). On white '
+               'rate noise the lag-m correlation is p^|m| (independent) or p at lag 1 only '
+               '(isolated), the variance kept: the PSD tilts up at low frequency and down at '
+               'Nyquist. On a swing run the holds average to a delay of about p dt.')
+    PARAMS = {'p': (0.05, '-', 'probability that a sample repeats the previous one'),
+              'isolated': (0.0, '-', '1: never two holds in a row (p < 0.5), 0: independent')}
 
     def check(self):
-        if not 0.0 <= self.p < 1.0:
-            raise InputError('stale_samples: p in [0, 1)')
+        if not 0.0 <= self.p < (0.5 if self.isolated else 1.0):
+            raise InputError('stale_samples: p in [0, 1), below 0.5 with isolated = 1')
 
     def output(self, ctx, gyro, accel):
         n = gyro.shape[1]
-        held = self.rng(ctx).random(n) < self.p
-        held[0] = False
+        u = self.rng(ctx).random(n)
+        if self.isolated:
+            # The chain P(hold | none before) = p / (1 - p), P(hold | hold) = 0 (stationary
+            # share p): in every run of candidates, holds alternate from its first sample.
+            cand = u < self.p / (1.0 - self.p)
+            cand[0] = False
+            start = np.maximum.accumulate(np.where(cand, 0, np.arange(n)))
+            held = cand & ((np.arange(n) - start) % 2 == 1)
+        else:
+            held = u < self.p
+            held[0] = False
         src = np.maximum.accumulate(np.where(held, 0, np.arange(n)))
         return gyro[:, src], accel[:, src]
