@@ -66,16 +66,40 @@ def separating_run(a: str, b: str) -> str:
     return SEPARATING_RUNS.get(frozenset({a, b}), DEFAULT_SEPARATING_RUN)
 
 
+# Rounds of (nuisance, effect) refits after the first fit of an effect: an effect that reshapes
+# the white noise (holds, smoothing) is first fitted at the N the baseline alone pulled off
+# its calibrated value, and one nuisance step (one grid cell) does not bring it back.
+ALTERNATIONS = 2
+
+
 def fit_on_top(objective, problem, selected: list, nuisance: Optional[tuple],
                space: EffectSpace, near: Optional[dict] = None):
-    """Fit ``space`` on top of ``selected``, then re-tune the baseline's nuisance parameters."""
+    """
+    Fit ``space`` on top of ``selected``, then re-tune the baseline's nuisance parameters.
+
+    While the nuisance step improves the gap, the effect is refitted at the new nuisance (up
+    to ``ALTERNATIONS`` rounds; over its whole space unless ``near`` is given, since effect and
+    nuisance can trade against each other in a narrow valley); no step that worsens the gap
+    is kept.
+    """
     extra = [nuisance] if nuisance else []
     params, ev = fit_effect(objective, selected + extra, space, near=near)
-    if problem.nuisance is not None:
+    if problem.nuisance is None:
+        return params, nuisance, ev
+    for turn in range(ALTERNATIONS):
+        # The first nuisance step searches its whole (narrow) range: the baseline alone may
+        # have pulled it to a bound that is wrong once the effect is in.
         nparams, nev = fit_effect(objective, selected + [(space.name, params)],
-                                  problem.nuisance, near=nuisance[1], refine=3)
-        if nev.gap < ev.gap:
-            return params, (problem.nuisance.name, nparams), nev
+                                  problem.nuisance, near=nuisance[1] if turn else None,
+                                  refine=3)
+        if nev.gap >= ev.gap:
+            break
+        nuisance, ev = (problem.nuisance.name, nparams), nev
+        fitted, fev = fit_effect(objective, selected + [nuisance], space,
+                                 near=params if near else None)
+        if fev.gap >= ev.gap:
+            break
+        params, ev = fitted, fev
     return params, nuisance, ev
 
 

@@ -48,12 +48,19 @@ def _ar1(sigma: float, tau_s: float, dt: float, order: int) -> Callable:
 
 
 def _resonance(sigma: float, freq_hz: float, q: float, dt: float) -> Callable:
-    a1, a2, var_e = resonance_coefficients(freq_hz, q, dt)
+    _, _, var_e = resonance_coefficients(freq_hz, q, dt)
+    half = np.pi * freq_hz * dt                  # theta0 / 2
+    r = np.exp(-half / q)
+    one_minus_r2 = (-np.expm1(-half / q)) ** 2
+    ch, sh = np.cos(half), np.sin(half)
 
     def psd(s2):
-        # |1 - a1 z - a2 z^2|^2, z = exp(-i w), in c = cos w.
-        c = 1.0 - 2.0 * s2
-        den = 1.0 + a1 * a1 + a2 * a2 - 2.0 * a1 * (1.0 - a2) * c - 2.0 * a2 * (2.0 * c * c - 1.0)
+        # |1 - a1 z - a2 z^2|^2 = |1 - r e^(i th0) z|^2 |1 - r e^(-i th0) z|^2, z = e^(-i w),
+        # each (1 - r)^2 + 4 r sin^2((w -+ th0) / 2): no cancellation for poles near the unit
+        # circle. The PSD is even and 2 pi periodic, so cos(w / 2) >= 0 may be taken.
+        s, c = np.sqrt(s2), np.sqrt(np.maximum(1.0 - s2, 0.0))
+        minus, plus = s * ch - c * sh, s * ch + c * sh
+        den = (one_minus_r2 + 4.0 * r * minus * minus) * (one_minus_r2 + 4.0 * r * plus * plus)
         return sigma ** 2 * var_e * dt / den
     return psd
 

@@ -104,7 +104,12 @@ def resonance_coefficients(freq_hz: float, q: float, dt: float):
     theta = 2.0 * np.pi * freq_hz * dt
     r = np.exp(-np.pi * freq_hz * dt / q)
     a1, a2 = 2.0 * r * np.cos(theta), -r * r
-    gamma0 = (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2) ** 2 - a1 * a1))
+    # gamma0 = (1 - a2) / ((1 + a2) ((1 - a2)^2 - a1^2)), in forms without cancellation for
+    # poles near the unit circle: 1 + a2 = 1 - r^2, (1 + r^2)^2 - 4 r^2 cos^2 = (1 - r^2)^2 +
+    # 4 r^2 sin^2.
+    one_minus_r2 = -np.expm1(-2.0 * np.pi * freq_hz * dt / q)
+    gamma0 = (1.0 + r * r) / (one_minus_r2 * (one_minus_r2 ** 2
+                                              + 4.0 * r * r * np.sin(theta) ** 2))
     return float(a1), float(a2), float(1.0 / gamma0)
 
 
