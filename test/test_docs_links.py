@@ -11,7 +11,7 @@ FENCE = re.compile(r'^```.*?^```', re.S | re.M)
 
 def slug(heading: str) -> str:
     """Return the GitHub anchor of a heading: lower case, punctuation dropped, spaces to -."""
-    text = re.sub(r'[`*_]|\[([^\]]*)\]\([^)]*\)', r'\1', heading.strip()).lower()
+    text = re.sub(r'[`*]|\[([^\]]*)\]\([^)]*\)', r'\1', heading.strip()).lower()
     return re.sub(r'[^\w\- ]', '', text).replace(' ', '-')
 
 
