@@ -18,7 +18,7 @@ from typing import List, Optional, Sequence
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
-from gyro_char.diagnosis.holds import Holds
+from gyro_char.diagnosis.holds import Holds, repeat_excess, REPEAT_Z
 from gyro_char.diagnosis.starts import markov_start
 from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
@@ -214,7 +214,6 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     # cannot be told from a random walk there: the simpler walk takes it.
     gm_tau = (3 * dt, tau_max / 2)
     gm_start = markov_start(y, dt, base.N, *gm_tau, *gm_sigma)
-    rho1, p_lo = float(np.dot(y[:-1], y[1:]) / max(np.dot(y, y), 1e-300)), 1.0 / np.sqrt(n)
     spaces = {
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
         # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline.
@@ -249,14 +248,20 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
                                      lines, levels),
         'resonance': resonance_space(sig_sample, f_tone, dt, obs.broad_peak(psd)),
-        # Holds: from a lag-1 correlation about its standard error 1 / sqrt(n) up to one
-        # sample in two (below one in two if never two in a row), started at the record's
-        # lag-1 correlation (p, on white noise; the coarse grid steps by a factor 4).
-        'stale_samples': EffectSpace('stale_samples', [
-            Param('p', p_lo, 0.45, init=min(max(rho1, p_lo), 0.45)),
-            Param('isolated', 0, 1, integer=True, choice=True)]),
     }
-    return [spaces[k] for k in names]
+    # Holds: searched where the record repeats samples exactly beyond what its rounding does
+    # (``holds.repeat_excess``; everywhere if the step is too coarse to tell). p from a lag-1
+    # correlation about its standard error 1 / sqrt(n) up to one sample in two (below one in
+    # two if never two in a row), started at the excess of repeats, else at the record's
+    # lag-1 correlation (p, on white noise; the coarse grid steps by a factor 4).
+    excess, excess_se = repeat_excess(x, base.lsb)
+    if not excess_se > 0.0 or excess > REPEAT_Z * excess_se:
+        start = excess if excess_se > 0.0 else float(np.dot(y[:-1], y[1:]) / np.dot(y, y))
+        p_lo = 1.0 / np.sqrt(n)
+        spaces['stale_samples'] = EffectSpace('stale_samples', [
+            Param('p', p_lo, 0.45, init=min(max(start, p_lo), 0.45)),
+            Param('isolated', 0, 1, integer=True, choice=True)])
+    return [spaces[k] for k in names if k in spaces]
 
 
 def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
