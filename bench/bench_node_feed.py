@@ -87,7 +87,7 @@ def main(argv=None) -> int:
     if not wait_for_subscribers(node, pubs, args.subscribers, 30.0):
         print('no subscriber matched within 30 s', file=sys.stderr)
         return 1
-    time.sleep(0.5)  # let the reader side finish matching too
+    time.sleep(1.0)  # let the reader side finish matching too (slow under load)
     sent = {'imu': 0, 'encoder': 0}
     burst = args.burst_ms * 1e-3
     t_end = max(t_imu[-1], t_enc[-1] if t_enc is not None else -math.inf)

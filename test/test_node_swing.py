@@ -357,9 +357,16 @@ def test_separate_processes_over_dds(tmp_path):
             # Nothing the node received was dropped by the node...
             assert v['samples_gyro'] == h['imu_accepted'] == h['imu_received']
             assert v['samples_encoder'] == h['encoder_accepted'] == h['encoder_received']
-            # ...and best-effort loopback transport lost next to nothing (counted, not hidden).
-            assert sent['imu'] - h['imu_received'] <= 0.002 * sent['imu']
-            assert sent['encoder'] - h['encoder_received'] <= 0.002 * sent['encoder']
+            # ...and what best-effort transport lost is small and shows in the counted gaps. A
+            # loaded 2-core machine can stall the receiving process long enough for the shared
+            # memory port to overflow (seen once in CI: 250 of 12 000): that loss must be
+            # visible as gaps, and only the stream's first samples or holes shorter than the
+            # gap threshold may go uncounted.
+            for name in ('imu', 'encoder'):
+                lost = sent[name] - h[f'{name}_received']
+                in_gaps = h[f'{name}_gap_time_s'] * h[f'{name}_rate_hz'] - h[f'{name}_gaps']
+                assert lost - in_gaps <= 0.002 * sent[name], (name, lost, in_gaps, h)
+                assert lost <= 0.05 * sent[name], (name, lost, h)
             truth = read_json(summary)['truth']['swing']
             assert _within(v['scale_factor_error'], v['scale_factor_error_sigma'],
                            truth['scale_factor_error'])
