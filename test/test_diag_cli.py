@@ -50,10 +50,32 @@ def test_diagnose_static_finds_an_unannounced_tone_and_writes_the_contract(tmp_p
     # ... down to what the simulation scores against itself
     assert d['final_gap'] < d['null_gap']['final_model_q95'] < d['baseline_gap']
     assert (out / 'diagnosis_gyro_x.png').stat().st_size > 10_000
+    # The selected tone makes the band's steady envelope: no band is reported.
+    assert d['non_gaussian_bands'] == []
     # The model fitted on the first record explains the withheld one too.
     h = d['holdout']
     assert h['final_gap'] < 0.6 * h['baseline_gap']
     assert [e['name'] for e in h['effects']] == d['selected_effects']
+
+
+def test_diagnose_static_says_which_band_is_not_gaussian(tmp_path):
+    # A machine running 1 s in 5 (a tone switched on and off): its band's power comes and
+    # goes, which no catalogue effect makes; the rest of the spectrum is Gaussian.
+    rng = np.random.default_rng(4)
+    n = 2 ** 15
+    t = np.arange(n) * 0.01
+    on = (np.floor(t) % 5 == 0).astype(float)
+    x = 0.4 * rng.standard_normal(n) + 1.0 * on * np.sin(2 * np.pi * 31.0 * t)
+    csv = tmp_path / 'rec.csv'
+    _write_csv(csv, np.round(x / 0.05) * 0.05)
+    out = tmp_path / 'out'
+    assert main(['diagnose', '--kind', 'static', str(csv), '--out', str(out), '--repeats', '5',
+                 '--check', '0', '--quiet']) == 0
+    d = json.loads((out / 'diagnosis.json').read_text())
+    bands = d['non_gaussian_bands']
+    assert len(bands) == 1 and bands[0]['range_hz'] == pytest.approx([30.0, 35.0]), bands
+    assert bands[0]['excess_kurtosis'] > bands[0]['model'] + 1.0
+    assert any(w.startswith('30-35 Hz: excess kurtosis') for w in d['warnings'])
 
 
 @pytest.mark.parametrize('args, message', [

@@ -62,9 +62,13 @@ class StaticExpect:
                                                     obs.ACF_LAGS)
         return self._det[key]
 
-    def __call__(self, i: int, effects: list) -> ExpectedStats:
+    def spectrum(self, effects: list):
+        """Return the model spectrum of the baseline plus ``effects`` (nuisance included)."""
         b, fx = _split(self.base, effects)
-        spec = model_spectrum(b.N, b.lsb, b.dt, fx)
+        return model_spectrum(b.N, b.lsb, b.dt, fx)
+
+    def __call__(self, i: int, effects: list) -> ExpectedStats:
+        spec = self.spectrum(effects)
         lay = self.layouts[i]
         det = self._deterministic(i, spec)
         mean = expected.expected_blocks(spec, lay, det, log_bias=self.log_bias[i])

@@ -126,6 +126,11 @@ def channel_task(task: dict) -> dict:
     if problem.check:
         out['closed_form_check'] = problem.check
         out['warnings'] = check_warnings(problem.check)
+    if problem.expect is not None:
+        bands = non_gaussian(task['records'][0], dt, opts['max_samples'], problem.expect,
+                             diag.model)
+        out['non_gaussian_bands'] = bands
+        out.setdefault('warnings', []).extend(band_warnings(bands))
     if opts['method'] == 'closed-form' and opts['check'] > 0:
         out['posterior_predictive'] = posterior_predictive(problem, diag, opts['check'],
                                                            opts['seed'])
@@ -134,6 +139,20 @@ def channel_task(task: dict) -> dict:
     if task.get('png'):
         plot_diagnosis(diag, problem.ranges[0], task['png'], title=f'{ch}: sim-to-real gap')
     return out
+
+
+def non_gaussian(x, dt: float, max_samples: Optional[int], expect, model) -> list:
+    """Bands of the analysed record whose excess kurtosis the selected model does not make."""
+    from gyro_char.diagnosis.band_kurtosis import non_gaussian_bands
+    x = np.asarray(x, dtype=np.float64)[:max_samples or None]
+    return non_gaussian_bands(x, dt, expect.spectrum(list(model)))
+
+
+def band_warnings(bands: Sequence[dict]) -> List[str]:
+    """Say in words which bands are not the Gaussian noise or steady lines the model holds."""
+    return [f'{b["range_hz"][0]:g}-{b["range_hz"][1]:g} Hz: excess kurtosis '
+            f'{b["excess_kurtosis"]:+.2f}, the selected model {b["model"]:+.2f} '
+            f'(sd {b["model_sd"]:.2g}): {b["meaning"]}' for b in bands]
 
 
 # Baseline twins off their closed form by more than this (rms, in its spread) void the gaps.
