@@ -52,6 +52,12 @@ CASES = {
                                                           'order': 1.0}),
                                ('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}),
                                ('stale_samples', {'p': 0.3, 'isolated': 1.0})],
+    # Runs of holds (a register frozen ~20 samples at a time), over the same spectrum.
+    'stale_samples_runs': [LOWPASS, ('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.2,
+                                                      'order': 1.0}),
+                           ('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}),
+                           ('stale_samples', {'p': 0.15, 'run': 20.0})],
+    'stale_samples_short_runs': [('stale_samples', {'p': 0.3, 'run': 3.0})],
 }
 
 
@@ -74,7 +80,10 @@ def test_expected_observables_equal_the_twins_within_their_scatter(name):
         assert np.all(np.abs(mean[block] - tw_mean) < tol), (name, block, mean[block], tw_mean)
         # ... and the closed-form spread that of the twins (chi-square scatter of 10 twins).
         ratio = np.median(tw_sd / np.maximum(sd[block], 1e-12))
-        assert 0.55 < ratio < 1.6, (name, block, ratio)
+        # Runs of holds are a random map: the record is a Gaussian scale mixture, so the
+        # Gaussian spreads read its scatter short (20-sample runs: adev 1.91, acf 1.61).
+        top = 2.5 if block in ('adev', 'acf') and name.endswith('_runs') else 1.6
+        assert 0.55 < ratio < top, (name, block, ratio)
 
 
 @pytest.mark.parametrize('name', ['temperature_drift', 'temperature_step'])

@@ -17,9 +17,20 @@ lag-m covariance is p (1 - p) l^|m|, l = -p / (1 - p). Hence, exactly,
 
 the second term a few lags long (|l|^m below 1e-7 beyond ``lags``).
 
-Both keep the variance; on white noise of variance s^2 they give R'(m) = s^2 p^|m| and
-R'(+-1) = s^2 p only. The integrals are trapezoids on ``GRID`` points; every integrand carries a
-factor sin^2(pi f dt), so a random walk's or flicker's low end stays finite.
+Runs of holds (``run`` > 0: a register frozen for several samples, mean run length L): the
+Markov chain P(hold | none before) = a, P(hold | hold) = c = 1 - 1 / L, share p = a / (1 - c +
+a). The lags D_0, D_m are computed through the chain's renewal at its last fresh sample:
+P(fresh at j | fresh at 0) = pi_0 + pi_h l^j, P(fresh at j | held at 0) = pi_0 (1 - l^j), l = c
+- a, and g(d) = pi_0 a c^(d-1) (d >= 1) is the stationary age law. The spectrum is
+|G|^2 S, G(z) = pi_0 (1 - l z^-1) / (1 - c z^-1), plus the transform of R'(m) - (g * g~ *
+R)(m), evaluated lag by lag on the variogram -D(k) / 2 in place of R (the weights of both sum
+to 1, so R(0) cancels and a random walk stays finite) to ``lags`` where c^m and l^m are
+below 1e-9. L = 1 is the isolated form, L = 1 / (1 - p) the independent one (tested).
+
+All keep the variance; on white noise of variance s^2 they give R'(m) = s^2 p^|m| and
+R'(+-1) = s^2 p only; runs R'(m) = s^2 p c^(|m|-1). The integrals are trapezoids on ``GRID``
+points; every integrand carries a factor sin^2(pi f dt), so a random walk's or flicker's low
+end stays finite.
 """
 from dataclasses import dataclass
 from typing import Sequence, Tuple
@@ -31,19 +42,43 @@ GRID = 1 << 14      # points of the integrals behind the holds' broadband share
 
 @dataclass(frozen=True)
 class Holds:
-    """Stale samples of one output: probability ``p``, independent or ``isolated``."""
+    """Stale samples of one output: share ``p``; independent, ``isolated``, or in runs."""
 
     p: float
     isolated: bool = False
+    run: float = 0.0            # mean run length of held samples (> 0: the run form)
+
+    def chain(self) -> Tuple[float, float, float, float]:
+        """Return the run form's chain: a, c, the fresh share pi_0 and l = c - a."""
+        c = 1.0 - 1.0 / self.run
+        a = self.p / (self.run * (1.0 - self.p))
+        return a, c, 1.0 - self.p, c - a
 
     def gain(self) -> float:
-        """Return the long-τ gain of the holds on white noise (in N): sqrt of S'(0) / S(0)."""
+        """
+        Return the holds' gain on white noise (in N) where the baseline's N is read.
+
+        Single-sample holds: the long-τ gain sqrt(S'(0) / S(0)) (within 1 % of the white
+        band's at p <= 0.1). Runs: S'/S averaged over the white band, 1-5 % of the sample
+        rate (``static_expect.calibrate_n``): runs lower it far below the long-τ level
+        1 + 2 p run, and the baseline's N is the band's.
+        """
         p = self.p
+        if self.run > 0.0:
+            _, c, pi0, _ = self.chain()
+            w = 2.0 * np.pi * np.linspace(0.01, 0.05, 65)
+            z = np.exp(1j * w)
+            ratio = 1.0 + 2.0 * (1.0 - pi0) * np.real(z / (1.0 - c * z))
+            return float(np.sqrt(np.mean(ratio)))
         return float(np.sqrt(1.0 + 2.0 * p if self.isolated else (1.0 + p) / (1.0 - p)))
 
     def g2(self, f, dt: float) -> np.ndarray:
         """Return |G|^2 at output frequencies ``f`` (the holds' averaging of a slow part)."""
         p, s2 = self.p, _s2(f, dt)
+        if self.run > 0.0:
+            _, c, pi0, lam = self.chain()
+            num = (1.0 - lam) ** 2 + 4.0 * lam * s2
+            return pi0 * pi0 * num / ((1.0 - c) ** 2 + 4.0 * c * s2)
         if self.isolated:
             return 1.0 - 4.0 * p * (1.0 - p) * s2
         return (1.0 - p) ** 2 / ((1.0 - p) ** 2 + 4.0 * p * s2)
@@ -59,6 +94,8 @@ class Holds:
         f0 = np.array([a for a, _ in lines], dtype=np.float64)
         power = np.array([b for _, b in lines], dtype=np.float64)
         p = self.p
+        if self.run > 0.0:
+            return self._run_terms(f, s, f0, power, dt)
         if not self.isolated:
             def lost(freq):
                 s2 = _s2(freq, dt)
@@ -72,8 +109,34 @@ class Holds:
         lam = -p / (1.0 - p)
         return -p * (1.0 - p) * lam ** m * _integral(f, s, second_difference, f0, power)
 
+    def _run_terms(self, f, s, f0, power, dt) -> np.ndarray:
+        """Return R'(m) - (g * g~ * R)(m), m = 0 .. lags - 1, of the run form (module doc)."""
+        a, c, pi0, lam = self.chain()
+        m_max = self.lags()
+        depth = _decay_length(c)
+        k = np.arange(m_max + depth + 2)
+        rv = _half_variogram(f, s, f0, power, dt, k.size)
+        w = np.r_[1.0, a * c ** np.arange(depth)]            # w(0) = 1, w(e) = a c^(e-1)
+        # Q(j) = sum_(d >= 1) pi_0 a c^(d-1) Rv(j + d): a backward recursion.
+        q = np.zeros(k.size)
+        for j in range(k.size - 2, -1, -1):
+            q[j] = pi0 * a * rv[j + 1] + c * q[j + 1]
+        j = np.arange(m_max)
+        v0 = np.where(j > 0, (pi0 + (1.0 - pi0) * lam ** j) * rv[:m_max], 0.0)
+        v1 = np.where(j > 0, pi0 * (1.0 - lam ** j) * q[:m_max], 0.0)
+        exact = pi0 * np.convolve(w, v0)[:m_max] + np.convolve(w, v1)[:m_max]
+        g = pi0 * w
+        rho = np.correlate(g, g, mode='full')                # lags -(len-1) .. len-1
+        full = np.r_[rv[::-1], rv[1:]]                       # Rv(-K) .. Rv(K)
+        conv = np.convolve(full, rho[::-1], mode='same')
+        centre = rv.size - 1
+        return exact - conv[centre:centre + m_max]
+
     def lags(self) -> int:
-        """Return how many lags of an isolated hold's correction are kept (|l|^m > 1e-7)."""
+        """Return how many lags of the correction are kept (isolated: |l|^m > 1e-7)."""
+        if self.run > 0.0:
+            _, c, _, lam = self.chain()
+            return max(_decay_length(c), _decay_length(abs(lam))) + 1
         lam = self.p / (1.0 - self.p)
         return 1 if lam <= 0.0 else int(np.ceil(np.log(1e-7) / np.log(lam))) + 1
 
@@ -81,12 +144,52 @@ class Holds:
         """Return the held one-sided PSD at ``f`` from the unheld one ``s`` and ``terms``."""
         p = self.p
         f = np.asarray(f, dtype=np.float64)
-        if self.isolated:
+        if self.run > 0.0 and terms.size > 32:
+            # Hundreds of lags: their cosine series on a fine uniform grid by one FFT (it is
+            # smooth on the scale 1 / lags), interpolated.
+            size = 1 << int(np.ceil(np.log2(64 * terms.size)))
+            series = np.fft.rfft(np.r_[terms, np.zeros(size - 2 * terms.size + 1),
+                                       terms[:0:-1]]).real
+            extra = np.interp(np.mod(f * dt, 1.0), np.arange(series.size) / size, series)
+            return self.g2(f, dt) * s + 2.0 * dt * extra
+        if self.isolated or self.run > 0.0:
             w = 2 * np.pi * f * dt
             extra = terms[0] + 2.0 * sum(c * np.cos(k * w) for k, c in enumerate(terms) if k)
             return self.g2(f, dt) * s + 2.0 * dt * extra
         ar1 = 2.0 * (1.0 - p * p) * dt / ((1.0 - p) ** 2 + 4.0 * p * _s2(f, dt))
         return self.g2(f, dt) * s + terms[0] * ar1
+
+
+def _half_variogram(f, s, f0, power, dt: float, count: int) -> np.ndarray:
+    """
+    Return -D(k) / 2 = integral of S (cos(w k) - 1), k = 0 .. count - 1, plus the lines'.
+
+    cos(w k) - 1 by the Chebyshev recurrence from the exact -2 sin^2(w / 2): one vector
+    operation a lag instead of a sine matrix, no cancellation where w k is small.
+    """
+    f = np.asarray(f, dtype=np.float64)
+    step = np.diff(f)
+    ws = np.zeros(f.size)
+    ws[:-1] += 0.5 * step
+    ws[1:] += 0.5 * step
+    ws *= s
+    c1 = -2.0 * _s2(f, dt)
+    two_cos = 2.0 * (1.0 + c1)
+    out = np.zeros(count)
+    prev, cur = np.zeros(f.size), c1.copy()
+    for j in range(1, count):
+        out[j] = float(np.dot(ws, cur))
+        prev, cur = cur, two_cos * cur - prev + 2.0 * c1
+    if np.size(f0):
+        kk = np.arange(count)
+        out += (np.asarray(power)[:, None]
+                * (-2.0 * np.sin(np.pi * np.asarray(f0)[:, None] * dt * kk) ** 2)).sum(axis=0)
+    return out
+
+
+def _decay_length(r: float, tol: float = 1e-9) -> int:
+    """Return the number of powers of ``r`` above ``tol`` (at least 1)."""
+    return 1 if r <= 0.0 else int(np.ceil(np.log(tol) / np.log(r))) + 1
 
 
 def _s2(f, dt: float) -> np.ndarray:
@@ -136,3 +239,24 @@ def repeat_excess(x: np.ndarray, lsb: float) -> Tuple[float, float]:
     p1 = 0.5 * float(np.count_nonzero(np.abs(k) == 1)) / n
     expected = p1 * float(np.exp(0.5 / v))
     return p0 - expected, float(np.sqrt((p0 + 0.5 * p1) / n))
+
+
+def repeat_runs(x: np.ndarray, lsb: float) -> Tuple[float, float]:
+    """
+    Return the mean length of the record's runs of two or more exact repeats, and their share.
+
+    The share is of all exact repeats (zero first differences, in output steps where
+    ``lsb`` > 0). Rounding repeats a sample now and then, rarely twice in a row where the
+    noise spans several steps; a register frozen for several samples repeats in runs. (0, 0)
+    where the record has no run of two.
+    """
+    d = np.diff(np.asarray(x, dtype=np.float64))
+    zero = (np.round(d / lsb) == 0) if lsb > 0.0 else (d == 0.0)
+    if not zero.any():
+        return 0.0, 0.0
+    edges = np.flatnonzero(np.diff(np.r_[0, zero.astype(np.int8), 0]))
+    lengths = edges[1::2] - edges[::2]
+    long = lengths[lengths >= 2]
+    if long.size == 0:
+        return 0.0, 0.0
+    return float(long.mean()), float(long.sum() / lengths.sum())

@@ -18,7 +18,7 @@ from typing import List, Optional, Sequence
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
-from gyro_char.diagnosis.holds import Holds, repeat_excess, REPEAT_Z
+from gyro_char.diagnosis.holds import Holds, repeat_excess, repeat_runs, REPEAT_Z
 from gyro_char.diagnosis.starts import markov_start
 from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
@@ -35,6 +35,10 @@ STATIC_EFFECTS = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'g
 TAU_REF = 1.0  # s, where N is read off the Allan curve
 NUISANCE = 'baseline_white_noise'  # pseudo-effect: scale on the baseline N, tuned per model
 PRESET = 'adis16405'  # only its structure is used: every number that matters is overridden
+# Runs of holds are searched where this share of the exact repeats come two or more in a row;
+# their mean length up to RUN_MAX samples.
+RUN_SHARE = 0.5
+RUN_MAX = 2000.0
 
 
 @dataclass
@@ -89,7 +93,8 @@ def twin_config(base: StaticBaseline, channel: str, effects: Sequence = ()) -> B
             lp = EFFECTS[name](**params)
             gain *= lp.noise_gain(int(lp.decimation))
         elif name == 'stale_samples':
-            gain *= Holds(params['p'], bool(params.get('isolated', 0.0))).gain()
+            gain *= Holds(params['p'], bool(params.get('isolated', 0.0)),
+                          float(params.get('run', 0.0))).gain()
     axis = AXES[channel_row(channel)]
     overrides = {
         'gyro': {'static_rate_hz': 1.0 / base.dt, 'output_step': base.lsb,
@@ -258,9 +263,15 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     if not excess_se > 0.0 or excess > REPEAT_Z * excess_se:
         start = excess if excess_se > 0.0 else float(np.dot(y[:-1], y[1:]) / np.dot(y, y))
         p_lo = 1.0 / np.sqrt(n)
+        p_param = Param('p', p_lo, 0.45, init=min(max(start, p_lo), 0.45))
         spaces['stale_samples'] = EffectSpace('stale_samples', [
-            Param('p', p_lo, 0.45, init=min(max(start, p_lo), 0.45)),
-            Param('isolated', 0, 1, integer=True, choice=True)])
+            p_param, Param('isolated', 0, 1, integer=True, choice=True)])
+        # Runs of holds (a frozen register): where most exact repeats come in runs of two or
+        # more, an alternative start at their mean length.
+        length, share = repeat_runs(x, base.lsb)
+        if length >= 2.0 and share > RUN_SHARE:
+            spaces['stale_samples'].alternatives = (EffectSpace('stale_samples', [
+                p_param, Param('run', 1.5, RUN_MAX, init=min(length, RUN_MAX))]),)
     return [spaces[k] for k in names if k in spaces]
 
 

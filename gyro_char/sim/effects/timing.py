@@ -129,19 +129,29 @@ class StaleSamples(Effect):
                'the previous sample repeated under a new stamp: a host loop that reads the '
                'sensor slightly faster than it updates, a DMA race. The sample it replaces is '
                'lost. Holds are independent (runs of several possible), or with isolated = 1 '
-               'never two in a row (a read loop a little faster than the sensor). On white '
+               'never two in a row (a read loop a little faster than the sensor), or in runs '
+               'of mean length run (run > 0: a register frozen for several samples while the '
+               'sensor is busy, the share of held samples still p). On white '
                'rate noise the lag-m correlation is p^|m| (independent) or p at lag 1 only '
                '(isolated), the variance kept: the PSD tilts up at low frequency and down at '
                'Nyquist. On a swing run the holds average to a delay of about p dt.')
     PARAMS = {'p': (0.05, '-', 'probability that a sample repeats the previous one'),
-              'isolated': (0.0, '-', '1: never two holds in a row (p < 0.5), 0: independent')}
+              'isolated': (0.0, '-', '1: never two holds in a row (p < 0.5), 0: independent'),
+              'run': (0.0, 'samples', 'mean length of a run of holds (>= 1; 0: independent '
+                                      'or isolated holds as set by isolated)')}
 
     def check(self):
         if not 0.0 <= self.p < (0.5 if self.isolated else 1.0):
             raise InputError('stale_samples: p in [0, 1), below 0.5 with isolated = 1')
+        if self.run and (self.run < 1.0 or self.p > self.run / (1.0 + self.run)):
+            raise InputError('stale_samples: run >= 1 and p <= run / (1 + run)')
 
     def output(self, ctx, gyro, accel):
         n = gyro.shape[1]
+        if self.run:
+            held = self._runs(n, self.rng(ctx))
+            src = np.maximum.accumulate(np.where(held, 0, np.arange(n)))
+            return gyro[:, src], accel[:, src]
         u = self.rng(ctx).random(n)
         if self.isolated:
             # The chain P(hold | none before) = p / (1 - p), P(hold | hold) = 0 (stationary
@@ -155,3 +165,18 @@ class StaleSamples(Effect):
             held[0] = False
         src = np.maximum.accumulate(np.where(held, 0, np.arange(n)))
         return gyro[:, src], accel[:, src]
+
+    def _runs(self, n: int, rng) -> np.ndarray:
+        """Held flags of the Markov chain: fresh runs of mean 1 / a, held runs of mean run."""
+        a = self.p / (self.run * (1.0 - self.p))
+        c = 1.0 - 1.0 / self.run
+        pairs = int(n * a / (1.0 - self.p) * 1.2) + 16     # enough fresh / held run pairs
+
+        def draw():                                        # lengths >= 1
+            hold = rng.geometric(1.0 - c, pairs) if c > 0.0 else np.ones(pairs, dtype=int)
+            return np.column_stack([rng.geometric(min(a, 1.0), pairs), hold]).ravel()
+        lengths = draw()
+        while lengths.sum() < n:                           # rare: draw more pairs
+            lengths = np.r_[lengths, draw()]
+        flags = np.repeat(np.tile([False, True], lengths.size // 2), lengths)[:n]
+        return flags
