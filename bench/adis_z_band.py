@@ -10,29 +10,23 @@ not, has an excess kurtosis of 0 or more; a line of steady amplitude has less.
 
     python bench/adis_z_band.py
 """
-import gzip
 from pathlib import Path
 
 from gyro_char.diagnosis import band_kurtosis as bk
 from gyro_char.diagnosis import observables as obs
+from gyro_char.io import read_imu
 import numpy as np
 from scipy import signal
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'adis16405'
-DT = 0.01
-
-
-def load_z(path: Path) -> np.ndarray:
-    """Return the Z gyro (rad/s) of one record."""
-    with gzip.open(path, 'rt') as fh:
-        dps = np.loadtxt(fh, delimiter=',', skiprows=1, usecols=(3,))
-    return np.deg2rad(dps)
 
 
 def main() -> int:
     for path in sorted(DATA.glob('adis16405_static_*.csv.gz')):
-        x = load_z(path)
-        f, _, s = signal.spectrogram(x - x.mean(), fs=1.0 / DT, nperseg=2048, noverlap=0)
+        rec = read_imu(str(path), quiet=True)
+        x = rec.channels['gyro_z']
+        dt = float(np.median(np.diff(rec.t)))
+        f, _, s = signal.spectrogram(x - x.mean(), fs=1.0 / dt, nperseg=2048, noverlap=0)
         band = (f >= 12.0) & (f <= 40.0)
         df = f[1] - f[0]
         peak = f[band][np.argmax(s[band], axis=0)]
@@ -40,9 +34,9 @@ def main() -> int:
         white = np.median(s[(f > 40.0) & (f < 48.0)]) * band.sum() * df
         near = np.array([s[band][np.abs(f[band] - p) <= 0.5, i].sum() / s[band][:, i].sum()
                          for i, p in enumerate(peak)])
-        ranges = bk.band_ranges(x.size, DT)
-        kurt = bk.record_kurtosis(obs.detrend(x), DT, ranges)
-        print(f'{path.name}: {peak.size} windows of {2048 * DT:.2f} s')
+        ranges = bk.band_ranges(x.size, dt)
+        kurt = bk.record_kurtosis(obs.detrend(x), dt, ranges)
+        print(f'{path.name}: {peak.size} windows of {2048 * dt:.2f} s')
         print('  peak frequency (Hz), 5/25/50/75/95 %:',
               np.round(np.percentile(peak, [5, 25, 50, 75, 95]), 2),
               '; first five windows:', np.round(peak[:5], 1))

@@ -48,9 +48,9 @@ def _mixed_spectrum():
 def test_runs_of_one_are_isolated_holds_and_geometric_runs_independent_ones(p):
     from gyro_char.diagnosis.holds import Holds
     spec, grid = _mixed_spectrum()
-    s = spec._unheld(grid, None)
+    s = spec.one_sided(grid)                   # no holds in spec: the unheld PSD
     f = np.linspace(0.01, 50.0, 500)
-    sf = spec._unheld(f, None)
+    sf = spec.one_sided(f)
     for general, exact in [(Holds(p, False, run=1.0), Holds(p, True)),
                            (Holds(p, False, run=1.0 / (1.0 - p)), Holds(p, False))]:
         got = general.apply(f, sf, general.terms(grid, s, spec.lines, DT), DT)

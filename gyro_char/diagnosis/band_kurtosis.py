@@ -36,8 +36,7 @@ import numpy as np
 
 LAGS = 4096        # lag grid of the band's autocorrelation (periodic; rho falls as 1 / k)
 THETA = 16         # phase samples of a line's harmonics (exact up to the 8th)
-
-
+POINTS = 512       # PSD samples across a band
 # A band is reported when it departs from the model by this many standard deviations and by
 # this much excess kurtosis (a 2 h record's sd is ~0.015: rounding leaves a few hundredths).
 REPORT_Z = 6.0
@@ -54,15 +53,10 @@ def _band_bins(n: int, dt: float, lo: float, hi: float) -> Tuple[int, int]:
     return int(np.ceil(lo / df)), min(int(np.ceil(hi / df)), n // 2)
 
 
-def record_kurtosis(x: np.ndarray, dt: float, ranges: np.ndarray,
-                    spectrum: np.ndarray = None) -> np.ndarray:
-    """
-    Excess kurtosis of the detrended record ``x`` in each band of ``ranges`` (Hz).
-
-    ``spectrum``: ``np.fft.rfft(x)``, if the caller has it already.
-    """
+def record_kurtosis(x: np.ndarray, dt: float, ranges: np.ndarray) -> np.ndarray:
+    """Excess kurtosis of the detrended record ``x`` in each band of ``ranges`` (Hz)."""
     n = x.size
-    spec = np.fft.rfft(x) if spectrum is None else spectrum
+    spec = np.fft.rfft(x)
     out = np.zeros(len(ranges))
     for i, (lo, hi) in enumerate(ranges):
         a, b = _band_bins(n, dt, lo, hi)
@@ -79,9 +73,6 @@ def record_kurtosis(x: np.ndarray, dt: float, ranges: np.ndarray,
     return out
 
 
-POINTS = 512       # PSD samples across a band
-
-
 def _band_models(spec, ranges) -> list:
     """Per band: the Gaussian part's PSD across it, its power, and the lines inside."""
     ranges = np.asarray(ranges, dtype=float)
@@ -90,9 +81,9 @@ def _band_models(spec, ranges) -> list:
     s = np.maximum(spec.one_sided(f.ravel()), 0.0).reshape(f.shape)
     out = []
     for (lo, hi), row in zip(ranges, s):
-        lines = [p for f0, p in spec.lines if lo <= f0 < hi and p > 0.0]
-        where = [f0 for f0, p in spec.lines if lo <= f0 < hi and p > 0.0]
-        out.append((row, float(row.mean()) * (hi - lo), np.array(lines), where))
+        inside = [(f0, p) for f0, p in spec.lines if lo <= f0 < hi and p > 0.0]
+        out.append((row, float(row.mean()) * (hi - lo), np.array([p for _, p in inside]),
+                    [f0 for f0, _ in inside]))
     return out
 
 

@@ -35,6 +35,7 @@ end stays finite.
 from dataclasses import dataclass
 from typing import Sequence, Tuple
 
+from gyro_char.sim.effects.timing import hold_chain
 import numpy as np
 
 GRID = 1 << 14      # points of the integrals behind the holds' broadband share
@@ -48,10 +49,15 @@ class Holds:
     isolated: bool = False
     run: float = 0.0            # mean run length of held samples (> 0: the run form)
 
+    @classmethod
+    def from_params(cls, params: dict) -> 'Holds':
+        """Return the holds of a ``stale_samples`` parameter dict (the simulator's names)."""
+        return cls(float(params['p']), bool(params.get('isolated', 0.0)),
+                   float(params.get('run', 0.0)))
+
     def chain(self) -> Tuple[float, float, float, float]:
         """Return the run form's chain: a, c, the fresh share pi_0 and l = c - a."""
-        c = 1.0 - 1.0 / self.run
-        a = self.p / (self.run * (1.0 - self.p))
+        a, c = hold_chain(self.p, self.run)
         return a, c, 1.0 - self.p, c - a
 
     def gain(self) -> float:

@@ -261,8 +261,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
             decim = max(decim, int(p.get('decimation', 1.0)))
             taps, stages = int(p['taps']), int(p.get('stages', 2.0))
         elif name == 'stale_samples':
-            holds = Holds(float(p['p']), bool(p.get('isolated', 0.0)),
-                          float(p.get('run', 0.0)))
+            holds = Holds.from_params(p)
     h = moving_average_kernel(taps, stages)
     gain = float(np.sqrt(decim * np.sum([h[r::decim].sum() ** 2 for r in range(decim)])))
     if holds is not None:

@@ -93,8 +93,7 @@ def twin_config(base: StaticBaseline, channel: str, effects: Sequence = ()) -> B
             lp = EFFECTS[name](**params)
             gain *= lp.noise_gain(int(lp.decimation))
         elif name == 'stale_samples':
-            gain *= Holds(params['p'], bool(params.get('isolated', 0.0)),
-                          float(params.get('run', 0.0))).gain()
+            gain *= Holds.from_params(params).gain()
     axis = AXES[channel_row(channel)]
     overrides = {
         'gyro': {'static_rate_hz': 1.0 / base.dt, 'output_step': base.lsb,

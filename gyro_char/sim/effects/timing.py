@@ -119,6 +119,15 @@ class TimestampJitter(Effect):
         return self._jitter(ctx, t, 1.0)
 
 
+def hold_chain(p: float, run: float):
+    """
+    Return (a, c) of held samples in runs: P(hold | none before), P(hold | hold).
+
+    Runs of mean length ``run`` (c = 1 - 1 / run) with a held share ``p`` (a / (1 - c + a)).
+    """
+    return p / (run * (1.0 - p)), 1.0 - 1.0 / run
+
+
 @register
 class StaleSamples(Effect):
     """The driver republishes the previous sample now and then: values held, stamps new."""
@@ -148,28 +157,25 @@ class StaleSamples(Effect):
 
     def output(self, ctx, gyro, accel):
         n = gyro.shape[1]
+        rng = self.rng(ctx)
         if self.run:
-            held = self._runs(n, self.rng(ctx))
-            src = np.maximum.accumulate(np.where(held, 0, np.arange(n)))
-            return gyro[:, src], accel[:, src]
-        u = self.rng(ctx).random(n)
-        if self.isolated:
+            held = self._runs(n, rng)
+        elif self.isolated:
             # The chain P(hold | none before) = p / (1 - p), P(hold | hold) = 0 (stationary
             # share p): in every run of candidates, holds alternate from its first sample.
-            cand = u < self.p / (1.0 - self.p)
+            cand = rng.random(n) < self.p / (1.0 - self.p)
             cand[0] = False
             start = np.maximum.accumulate(np.where(cand, 0, np.arange(n)))
             held = cand & ((np.arange(n) - start) % 2 == 1)
         else:
-            held = u < self.p
+            held = rng.random(n) < self.p
             held[0] = False
         src = np.maximum.accumulate(np.where(held, 0, np.arange(n)))
         return gyro[:, src], accel[:, src]
 
     def _runs(self, n: int, rng) -> np.ndarray:
         """Held flags of the Markov chain: fresh runs of mean 1 / a, held runs of mean run."""
-        a = self.p / (self.run * (1.0 - self.p))
-        c = 1.0 - 1.0 / self.run
+        a, c = hold_chain(self.p, self.run)
         pairs = int(n * a / (1.0 - self.p) * 1.2) + 16     # enough fresh / held run pairs
 
         def draw():                                        # lengths >= 1
