@@ -71,6 +71,9 @@ class Problem:
     # best removes, however the two gaps compare: their difference is then the catalogue
     # shapes' fit to a real shape, not evidence.
     unresolved: frozenset = frozenset()
+    # The search spaces re-seeded from where the baseline's gap lies, ``reseed(where)``, when
+    # the kind has data-driven starts that only the gap can place (a weak mode's band).
+    reseed: Optional[Callable[[List[dict]], List[EffectSpace]]] = None
 
 
 def objective_for(problem: Problem, seeds: Sequence[int]):
@@ -174,6 +177,8 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                 w['record'] = i
             where.append(w)
     where.sort(key=lambda w: -abs(w['excess']))
+    if problem.reseed is not None:
+        problem.spaces = problem.reseed(where)
 
     fits = {}
     bar = progress(total=len(problem.spaces), desc='ranking effects', quiet=quiet)

@@ -20,7 +20,7 @@ from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.holds import Holds, repeat_excess, repeat_runs, REPEAT_Z
 from gyro_char.diagnosis.starts import markov_start
-from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
+from gyro_char.diagnosis.static_bands import resonance_space, vibration_space, with_gap_band
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
 from gyro_char.errors import InputError
 from gyro_char.sim import simulator
@@ -345,12 +345,13 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
         x = simulate_twin(b, layouts[i].n, fx, seed + 7919 * i, channel)
         return obs.static_observables(x, layouts[i])
 
-    return Problem(kind='static', reals=reals, simulate=simulate,
-                   spaces=static_spaces(base, recs[0], names),
+    spaces = static_spaces(base, recs[0], names)
+    return Problem(kind='static', reals=reals, simulate=simulate, spaces=spaces,
                    ranges=[lay.ranges for lay in layouts], units=dict(obs.BLOCK_UNITS),
                    baseline=base.to_json(),
                    nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]),
-                   context=base, unresolved=unresolved_pairs(len(recs)))
+                   context=base, unresolved=unresolved_pairs(len(recs)),
+                   reseed=lambda where: with_gap_band(spaces, where, base.N / np.sqrt(dt), dt))
 
 
 def unresolved_pairs(records: int) -> frozenset:

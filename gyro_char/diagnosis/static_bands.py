@@ -5,11 +5,23 @@ Both start from what the record's Welch PSD shows: the strongest narrow peak, th
 (a comb, further tones) and the highest broad bump (a structural mode with no narrow peak:
 a mode folded from above the output Nyquist frequency, or one sensed in rate).
 """
-from typing import Optional, Sequence
+from dataclasses import replace
+from typing import List, Optional, Sequence
 
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.fit import EffectSpace, Param
 import numpy as np
+
+
+def _mode_space(sig_sample: float, lo: float, hi: float, dt: float,
+                q: Optional[float] = None) -> EffectSpace:
+    """A ``resonance`` search with its centre in [lo, hi] Hz (and a start for q, if given)."""
+    hi = min(hi, 0.45 / dt)
+    return EffectSpace('resonance', [
+        Param('sigma', 0.01 * sig_sample, 2.0 * sig_sample),
+        Param('freq_hz', min(lo, 0.9 * hi), hi, log=False,
+              init=None if q is None else float(np.sqrt(lo * hi))),
+        Param('q', 1.0, 300.0, init=q)])
 
 
 def resonance_space(sig_sample: float, f_tone: float, dt: float,
@@ -21,15 +33,44 @@ def resonance_space(sig_sample: float, f_tone: float, dt: float,
     Where the PSD shows a broad bump elsewhere (``observables.broad_peak``), a mode about the
     bump is the alternative start: a wide mode has no narrow peak to start from.
     """
-    def space(f0: float) -> EffectSpace:
-        return EffectSpace('resonance', [
-            Param('sigma', 0.01 * sig_sample, 2.0 * sig_sample),
-            Param('freq_hz', 0.85 * f0, min(1.15 * f0, 0.45 / dt), log=False),
-            Param('q', 1.0, 300.0)])
-    main = space(f_tone)
+    main = _mode_space(sig_sample, 0.85 * f_tone, 1.15 * f_tone, dt)
     if bump is not None and abs(bump - f_tone) > 0.15 * f_tone and bump < 0.45 / dt:
-        main.alternatives = (space(bump),)
+        main.alternatives = (_mode_space(sig_sample, 0.85 * bump, 1.15 * bump, dt),)
     return main
+
+
+def with_gap_band(spaces: Sequence[EffectSpace], where: Sequence[dict], sig_sample: float,
+                  dt: float) -> List[EffectSpace]:
+    """
+    Return ``spaces`` with a ``resonance`` start at the band where the PSD's gap is highest.
+
+    A weak mode raises a band of the Welch PSD a little: too little for a bump in the raw
+    PSD (``observables.broad_peak``), while the strongest narrow peak is then wherever the
+    noise put it. The gap's own location (``where``: a run of Welch bins standing above the
+    baseline's scatter) says where the mode is; its width gives q's start.
+    """
+    bands = [w for w in where if w['observable'] == 'psd' and w['excess'] > 0.0]
+    if not bands:
+        return list(spaces)
+    lo, hi = max(bands, key=lambda w: w['excess'])['range']
+    centre = float(np.sqrt(lo * hi))
+    if centre >= 0.45 / dt:
+        return list(spaces)
+    out = []
+    for space in spaces:
+        if space.name == 'resonance' and not any(
+                _centre_in(s, centre) for s in (space,) + tuple(space.alternatives)):
+            q = float(np.clip(centre / max(hi - lo, 1e-9), 1.0, 300.0))
+            band = _mode_space(sig_sample, min(lo, 0.85 * centre), max(hi, 1.15 * centre),
+                               dt, q)
+            space = replace(space, alternatives=tuple(space.alternatives) + (band,))
+        out.append(space)
+    return out
+
+
+def _centre_in(space: EffectSpace, f: float) -> bool:
+    p = next(p for p in space.params if p.name == 'freq_hz')
+    return p.lo <= f <= p.hi
 
 
 def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
