@@ -346,12 +346,13 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
         return obs.static_observables(x, layouts[i])
 
     spaces = static_spaces(base, recs[0], names)
+    span = (layouts[0].ranges['psd'][0][0], layouts[0].ranges['psd'][-1][1])
     return Problem(kind='static', reals=reals, simulate=simulate, spaces=spaces,
                    ranges=[lay.ranges for lay in layouts], units=dict(obs.BLOCK_UNITS),
                    baseline=base.to_json(),
                    nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]),
                    context=base, unresolved=unresolved_pairs(len(recs)),
-                   reseed=lambda where: with_gap_band(spaces, where, base.N / np.sqrt(dt), dt))
+                   reseed=lambda where: with_gap_band(spaces, where, base.N / np.sqrt(dt), dt, span))
 
 
 def unresolved_pairs(records: int) -> frozenset:

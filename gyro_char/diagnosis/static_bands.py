@@ -13,6 +13,10 @@ from gyro_char.diagnosis.fit import EffectSpace, Param
 import numpy as np
 
 
+# The widest gap band taken for a mode's (hi / lo): a mode of q 1 raises about two octaves.
+BAND_MAX_RATIO = 4.0
+
+
 def _mode_space(sig_sample: float, lo: float, hi: float, dt: float,
                 q: Optional[float] = None) -> EffectSpace:
     """A ``resonance`` search with its centre in [lo, hi] Hz (and a start for q, if given)."""
@@ -40,21 +44,25 @@ def resonance_space(sig_sample: float, f_tone: float, dt: float,
 
 
 def with_gap_band(spaces: Sequence[EffectSpace], where: Sequence[dict], sig_sample: float,
-                  dt: float) -> List[EffectSpace]:
+                  dt: float, psd_span: Sequence[float]) -> List[EffectSpace]:
     """
     Return ``spaces`` with a ``resonance`` start at the band where the PSD's gap is highest.
 
     A weak mode raises a band of the Welch PSD a little: too little for a bump in the raw
     PSD (``observables.broad_peak``), while the strongest narrow peak is then wherever the
     noise put it. The gap's own location (``where``: a run of Welch bins standing above the
-    baseline's scatter) says where the mode is; its width gives q's start.
+    baseline's scatter) says where the mode is; its width gives q's start. Only a band with
+    room on both sides within ``psd_span`` (the PSD block's lowest and highest frequency)
+    and at most ``BAND_MAX_RATIO`` wide is a mode's: a rise towards either end of the
+    spectrum is a slow process's, or a filter's.
     """
     bands = [w for w in where if w['observable'] == 'psd' and w['excess'] > 0.0]
     if not bands:
         return list(spaces)
     lo, hi = max(bands, key=lambda w: w['excess'])['range']
     centre = float(np.sqrt(lo * hi))
-    if centre >= 0.45 / dt:
+    if (lo <= psd_span[0] or hi >= psd_span[1] or hi > BAND_MAX_RATIO * lo
+            or centre >= 0.45 / dt):
         return list(spaces)
     out = []
     for space in spaces:
