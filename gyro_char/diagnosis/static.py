@@ -352,7 +352,8 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
                    baseline=base.to_json(),
                    nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]),
                    context=base, unresolved=unresolved_pairs(len(recs)),
-                   reseed=lambda where: with_gap_band(spaces, where, base.N / np.sqrt(dt), dt, span))
+                   reseed=lambda where: with_gap_band(spaces, where, base.N / np.sqrt(dt), dt,
+                                                      span))
 
 
 def unresolved_pairs(records: int) -> frozenset:
