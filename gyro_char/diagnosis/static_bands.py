@@ -19,7 +19,7 @@ BAND_MAX_RATIO = 4.0
 
 def _mode_space(sig_sample: float, lo: float, hi: float, dt: float,
                 q: Optional[float] = None) -> EffectSpace:
-    """A ``resonance`` search with its centre in [lo, hi] Hz (and a start for q, if given)."""
+    """Return a ``resonance`` search with its centre in [lo, hi] Hz (q started at ``q``)."""
     hi = min(hi, 0.45 / dt)
     return EffectSpace('resonance', [
         Param('sigma', 0.01 * sig_sample, 2.0 * sig_sample),
