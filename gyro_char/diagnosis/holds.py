@@ -230,14 +230,13 @@ def repeat_excess(x: np.ndarray, lsb: float) -> Tuple[float, float]:
     v their variance; holds add their share at 0 alone. Returns (nan, nan) where the step is
     too coarse to tell (differences spread over less than about one step).
     """
-    d = np.diff(np.asarray(x, dtype=np.float64))
-    n = d.size
+    k = _steps(x, lsb)
+    n = k.size
     if n < 2:
         return float('nan'), float('nan')
     if lsb <= 0.0:
-        share = float(np.count_nonzero(d == 0.0)) / n
+        share = float(np.count_nonzero(k == 0.0)) / n
         return share, float(np.sqrt(max(share, 1.0 / n) / n))
-    k = np.round(d / lsb)
     v = float(np.var(k))
     if v < 1.0:
         return float('nan'), float('nan')
@@ -256,8 +255,7 @@ def repeat_runs(x: np.ndarray, lsb: float) -> Tuple[float, float]:
     noise spans several steps; a register frozen for several samples repeats in runs. (0, 0)
     where the record has no run of two.
     """
-    d = np.diff(np.asarray(x, dtype=np.float64))
-    zero = (np.round(d / lsb) == 0) if lsb > 0.0 else (d == 0.0)
+    zero = _steps(x, lsb) == 0.0
     if not zero.any():
         return 0.0, 0.0
     edges = np.flatnonzero(np.diff(np.r_[0, zero.astype(np.int8), 0]))
@@ -266,3 +264,9 @@ def repeat_runs(x: np.ndarray, lsb: float) -> Tuple[float, float]:
     if long.size == 0:
         return 0.0, 0.0
     return float(long.mean()), float(long.sum() / lengths.sum())
+
+
+def _steps(x: np.ndarray, lsb: float) -> np.ndarray:
+    """Return the record's first differences in output steps (as they are where ``lsb`` 0)."""
+    d = np.diff(np.asarray(x, dtype=np.float64))
+    return np.round(d / lsb) if lsb > 0.0 else d

@@ -64,16 +64,12 @@ def with_gap_band(spaces: Sequence[EffectSpace], where: Sequence[dict], sig_samp
     if (lo <= psd_span[0] or hi >= psd_span[1] or hi > BAND_MAX_RATIO * lo
             or centre >= 0.45 / dt):
         return list(spaces)
-    out = []
-    for space in spaces:
-        if space.name == 'resonance' and not any(
-                _centre_in(s, centre) for s in (space,) + tuple(space.alternatives)):
-            q = float(np.clip(centre / max(hi - lo, 1e-9), 1.0, 300.0))
-            band = _mode_space(sig_sample, min(lo, 0.85 * centre), max(hi, 1.15 * centre),
-                               dt, q)
-            space = replace(space, alternatives=tuple(space.alternatives) + (band,))
-        out.append(space)
-    return out
+    q = float(np.clip(centre / max(hi - lo, 1e-9), 1.0, 300.0))
+    band = _mode_space(sig_sample, min(lo, 0.85 * centre), max(hi, 1.15 * centre), dt, q)
+    return [replace(space, alternatives=tuple(space.alternatives) + (band,))
+            if space.name == 'resonance' and not any(
+                _centre_in(s, centre) for s in (space,) + tuple(space.alternatives))
+            else space for space in spaces]
 
 
 def _centre_in(space: EffectSpace, f: float) -> bool:
