@@ -21,7 +21,8 @@ twins of those records under a list of effects, and the candidate effects' searc
    when the problem has a ``choose`` criterion (``choice.Criterion``), the candidates that
    close the gap comparably are ranked by it instead of by the gap (``choose_among``);
 6. refits the selected effects jointly (coordinate passes, each with the others fixed) and
-   reports the final gap after that (``refined``).
+   reports the final gap after that (``refined``); when the kind asks for it, then drops
+   any selected effect the others have made redundant (``refined['dropped']``).
 """
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence
@@ -31,7 +32,7 @@ from gyro_char.diagnosis.choice import INDISTINGUISHABLE, refit_score
 from gyro_char.diagnosis.closed_form import ExpectedObjective
 from gyro_char.diagnosis.fit import EffectSpace, Evaluation, fit_effect, GapObjective
 from gyro_char.diagnosis.greedy import (
-    backfit, could_trail, fit_on_top, gap_in, look_alikes, separating_run, yardstick)
+    backfit, could_trail, fit_on_top, gap_in, look_alikes, prune, separating_run, yardstick)
 from gyro_char.progress import progress
 import numpy as np
 
@@ -74,6 +75,9 @@ class Problem:
     # The search spaces re-seeded from where the baseline's gap lies, ``reseed(where)``, when
     # the kind has data-driven starts that only the gap can place (a weak mode's band).
     reseed: Optional[Callable[[List[dict]], List[EffectSpace]]] = None
+    # Whether a selected effect that the later ones have made redundant is dropped after the
+    # joint refit (``greedy.prune``): a warm-up standing in for a random walk's trend.
+    prune: bool = False
 
 
 def objective_for(problem: Problem, seeds: Sequence[int]):
@@ -269,8 +273,12 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                       **({'criterion': scores} if scores else {})})
         current = ev
     greedy_gap = current.gap
+    dropped = []
     if selected:
         selected, nuisance, current = backfit(objective, problem, selected, nuisance, current)
+        if problem.prune:
+            selected, nuisance, current, dropped = prune(objective, problem, selected,
+                                                         nuisance, current, base, base_needed)
     evaluations['final'] = current
     model = selected + ([nuisance] if nuisance else [])
     return Diagnosis(
@@ -286,7 +294,7 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         ambiguous=ambiguous, baseline=problem.baseline,
         baseline_excess=excess_gap(base.gap, null), final_excess=excess_gap(current.gap, null),
         refined={'gap_before': greedy_gap, 'gap_after': current.gap,
-                 'params': {n: _jsonable(p) for n, p in selected}},
+                 'params': {n: _jsonable(p) for n, p in selected}, 'dropped': dropped},
         evaluations=evaluations,
         reals=problem.reals, model=model)
 

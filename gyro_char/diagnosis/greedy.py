@@ -190,3 +190,37 @@ def backfit(objective, problem, selected: list, nuisance: Optional[tuple],
         if before - current.gap < 1e-3 * before:
             break
     return selected, nuisance, current
+
+
+def prune(objective, problem, selected: list, nuisance: Optional[tuple], current: Evaluation,
+          base: Evaluation, base_needed: float):
+    """
+    Drop each selected effect that the others have made redundant (backward elimination).
+
+    A greedy step adds the effect that shrinks the gap most given the earlier ones; a later
+    effect may explain what an earlier one was only standing in for (a warm-up fitted to the
+    trend of a random walk's one realization, before the walk itself). An effect is dropped
+    when the model without it, the others refitted, scores within the greedy bar (twice the
+    current model's null spread) of the model with it, judged in the yardstick of the model
+    with it. Cheapest removal first, one at a time, never the last effect.
+    """
+    dropped = []
+    while len(selected) > 1:
+        scatters = [base, current]
+        null_now = diag_gap.null_gaps(current.stats, yardstick=lambda k: yardstick(scatters, k))
+        needed = max(base_needed, 2.0 * float(np.std(null_now, ddof=1)))
+        gap_now = gap_in(objective, current, scatters)
+        trials = []
+        for k, (name, params) in enumerate(selected):
+            rest = selected[:k] + selected[k + 1:]
+            ev = objective.evaluate(rest + ([nuisance] if nuisance else []))
+            rest, nuis, ev = backfit(objective, problem, list(rest), nuisance, ev, passes=1,
+                                     refine=3)
+            trials.append((gap_in(objective, ev, scatters) - gap_now, k, rest, nuis, ev))
+        cost, k, rest, nuis, ev = min(trials, key=lambda t: t[0])
+        if cost > needed:
+            break
+        dropped.append({'effect': selected[k][0], 'params': dict(selected[k][1]),
+                        'gap_without': ev.gap, 'cost': float(cost), 'needed': needed})
+        selected, nuisance, current = rest, nuis, ev
+    return selected, nuisance, current, dropped

@@ -353,7 +353,8 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
                    nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]),
                    context=base, unresolved=unresolved_pairs(len(recs)),
                    reseed=lambda where: with_gap_band(spaces, where, base.N / np.sqrt(dt), dt,
-                                                      span))
+                                                      span),
+                   prune=True)
 
 
 def unresolved_pairs(records: int) -> frozenset:
