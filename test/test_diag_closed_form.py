@@ -22,8 +22,11 @@ CASES = {
     'baseline': [],
     'internal_lowpass': [LOWPASS],
     'bias_instability': [('bias_instability', {'B': 3e-4})],
-    # (B 2e-3 would be stronger, but then the acf's Bartlett spread is 1.7-1.9x too narrow,
-    # with or without the corner: Bartlett's formula assumes short memory.)
+    # Slow processes that carry the record's variance: its r(0) scatters, and the acf with it
+    # (Bartlett's formula, which takes r(0) as known, read these 1.7-1.9x too narrow).
+    'bias_instability_strong': [('bias_instability', {'B': 2e-3})],
+    'rate_random_walk_strong': [('rate_random_walk', {'K': 5e-3})],
+    'gauss_markov_slow': [('gauss_markov', {'sigma': 2e-2, 'tau_s': 30.0, 'order': 1.0})],
     'bias_instability_corner': [('bias_instability', {'B': 1e-3, 'corner_hz': 0.5}), LOWPASS],
     'rate_random_walk': [('rate_random_walk', {'K': 3e-5})],
     'gauss_markov': [('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.2, 'order': 1.0})],

@@ -12,15 +12,16 @@ form of the record, so its expectation is a linear functional of the model's PSD
 - Welch PSD (Hann, 50 % overlap): S convolved with the window's |W(f)|^2, on a grid 8 times
   finer than the segment's bins (the bins used are >= 2, where the segment-mean removal has
   no effect); lines add |W(f - f0)|^2 exactly;
-- autocorrelation at small lags of the detrended record: (E r(0) - D(k) / 2) / E r(0), with
-  the variogram D(k) = 2 int S (1 - cos 2 pi f k dt) df and E r(0) = int S (1 - G(f T)) df,
+- autocorrelation at small lags of the detrended record: 1 - D(k) / 2 r(0), with the
+  variogram D(k) = 2 int S (1 - cos 2 pi f k dt) df and E r(0) = int S (1 - G(f T)) df,
   G = the share of a sinusoid's power the record's least-squares line removes (this keeps
-  random walks and flicker finite);
+  random walks and flicker finite); the ratio's mean and spread by the delta method over the
+  periodogram's bins (``acf_moments``: a slow process makes r(0) itself scatter);
 - early-minus-late means (``drift``): linear, so the expectation is the deterministic part's.
 
 Spreads (``spread``): chi-square with the Welch and Allan equivalent degrees of freedom
-(Greenhall's EDF per component, combined by Satterthwaite), Bartlett's formula for the
-autocorrelation, the exact variance of the linear ``drift`` forms; the ``tone`` block (a
+(Greenhall's EDF per component, combined by Satterthwaite), the delta method for the
+autocorrelation (``acf_moments``), the exact variance of the linear ``drift`` forms; the ``tone`` block (a
 running-median prominence, not linear) is sampled from the Welch bins' chi-square law.
 """
 from dataclasses import dataclass
@@ -255,6 +256,51 @@ def acf_integrals(spec: ModelSpectrum, g: Grids, lags: int):
     return r0, dk
 
 
+# DFT bins of the record summed one by one in ``acf_moments`` (beyond, integrals).
+ACF_BINS = 1024
+
+
+def acf_moments(spec: ModelSpectrum, g: Grids, lags: int, det: Deterministic = None):
+    """
+    Return the mean and the standard deviation of the autocorrelation at lags 1..``lags``.
+
+    1 - acf(k) = D(k) / 2 r(0), a ratio of two sums over the detrended record's periodogram
+    bins (independent exponentials of mean S(j / n) (1 - G(j)) / n): r(0) weighs them by 1,
+    the variogram D(k) by 4 sin^2(pi k j / n). The ratio's moments by the delta method with
+    their variances and covariance: it is Bartlett's formula when the variance is spread over
+    many bins, and it keeps the scatter of 1 / r(0) when a slow process puts the variance in a
+    few (a random walk: r(0) a chi-square of some 20 degrees of freedom). A line adds its
+    power to the means and its cross term with the noise in its bin to the variances; the
+    deterministic part adds to the means only.
+    """
+    r0, dk = acf_integrals(spec, g, lags)
+    k = np.arange(1, lags + 1, dtype=float)
+    det0 = 0.0 if det is None else float(det.acov[0])
+    detk = 0.0 if det is None else det.acov[1:lags + 1]
+    mu0, mu_d = r0 + det0, dk + 2.0 * (det0 - detk)
+    j = np.arange(1, min(ACF_BINS, g.n // 2) + 1, dtype=float)
+    a = spec.one_sided(j / g.n / g.dt) / g.dt * _detrend_keep(j) / g.n
+    w = 4.0 * np.sin(np.pi * np.outer(k, j / g.n)) ** 2
+    a2 = a * a
+    v0, v_d, c = float(a2.sum()), (w * w) @ a2, w @ a2
+    if g.n // 2 > ACF_BINS:
+        nu = np.geomspace((ACF_BINS + 0.5) / g.n, 0.5, 2000)
+        s2 = (spec.one_sided(nu / g.dt) / g.dt) ** 2 * _trapz_weights(nu) / g.n
+        w = 4.0 * np.sin(np.pi * np.outer(k, nu)) ** 2
+        v0, v_d, c = v0 + float(s2.sum()), v_d + (w * w) @ s2, c + w @ s2
+    for f0, power in spec.lines:   # a line's bin: noise and line, a cross term 2 a P
+        nu0 = f0 * g.dt
+        keep = float(_detrend_keep(np.array([nu0 * g.n]))[0])
+        cross = 2.0 * power * keep * float(spec.one_sided(np.array([f0]))[0]) / g.dt * keep / g.n
+        w = 4.0 * np.sin(np.pi * k * nu0) ** 2
+        v0, v_d, c = v0 + cross, v_d + w * w * cross, c + w * cross
+    ratio = mu_d / (2.0 * mu0)
+    rel0, cov = v0 / mu0 ** 2, c / (mu_d * mu0)
+    mean = (1.0 - k / g.n) * (1.0 - ratio * (1.0 + rel0 - cov))
+    sd = np.abs(ratio) * np.sqrt(np.maximum(v_d / mu_d ** 2 + rel0 - 2.0 * cov, 0.0))
+    return mean, sd
+
+
 def tone_block(noise: np.ndarray, lines: np.ndarray, g: Grids, layout) -> np.ndarray:
     """
     Tone prominence per band for ``TONE_DRAWS`` chi-square draws of the Welch bins.
@@ -356,9 +402,6 @@ def expected_blocks(spec: ModelSpectrum, layout, det: Deterministic = None,
                     np.interp(0.5 * (lo + hi), f, total)
                     for b, (lo, hi) in zip(bins, layout.ranges['psd'])])
     tone = tone_block(noise + det.welch, lines, g, layout)
-    r0, dk = acf_integrals(spec, g, lags)
-    k = np.arange(1, lags + 1)
-    e0 = r0 + det.acov[0]
-    acf = (1.0 - k / g.n) * (e0 - 0.5 * dk + det.acov[1:] - det.acov[0]) / e0
+    acf, _ = acf_moments(spec, g, lags, det)
     return {'adev': adev, 'psd': np.log10(np.maximum(psd, 1e-300)), 'tone': tone.mean(axis=0),
             'acf': acf, 'drift': det.drift.copy()}

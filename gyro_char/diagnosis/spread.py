@@ -8,7 +8,7 @@ Sampling spread of the static observables of a twin, in closed form (the gap's y
 - ``psd`` (log10 of a bin mean): each Welch bin is chi-square with 2 k_eff degrees of freedom;
   neighbouring Hann bins correlate by 4/9 and 1/36; a line adds its cross term with the noise.
 - ``tone``: spread of the chi-square draws (``expected.tone_block``).
-- ``acf``: Bartlett's formula from the model's own autocorrelation.
+- ``acf``: the delta method over the periodogram's bins (``expected.acf_moments``).
 - ``drift``: the exact variance of each linear form (record minus its line, early minus late
   mean), as the integral of the PSD against the form's |C(f)|^2.
 """
@@ -23,7 +23,6 @@ from scipy import special
 
 LN10 = np.log(10.0)
 BIN_RHO = (1.0, 4.0 / 9.0, 1.0 / 36.0)
-BARTLETT_LAGS = 64
 
 
 @lru_cache(maxsize=4096)
@@ -85,17 +84,6 @@ def drift_sd(spec, g) -> np.ndarray:
     return np.sqrt(np.maximum(var, 0.0))
 
 
-def acf_sd(spec, g, lags: int) -> np.ndarray:
-    r0, dk = ex.acf_integrals(spec, g, BARTLETT_LAGS + lags)
-    rho = np.r_[1.0, 1.0 - 0.5 * dk / r0]
-    j = np.arange(1, BARTLETT_LAGS + 1)
-    out = np.empty(lags)
-    for k in range(1, lags + 1):
-        a = rho[np.abs(j + k)] + rho[np.abs(j - k)] - 2.0 * rho[k] * rho[np.abs(j)]
-        out[k - 1] = np.sqrt(np.sum(a * a) / g.n)
-    return out
-
-
 def spreads(spec, layout, det=None) -> Dict[str, np.ndarray]:
     """Return the standard deviation of every static block of a twin described by ``spec``."""
     g = ex.grids(layout.n, layout.dt)
@@ -121,4 +109,4 @@ def spreads(spec, layout, det=None) -> Dict[str, np.ndarray]:
         psd.append(np.sqrt(v) / b.size / (total[b].mean() * LN10))
     tone = ex.tone_block(noise, lines, g, layout).std(axis=0, ddof=1)
     return {'adev': sd_adev, 'psd': np.array(psd), 'tone': tone,
-            'acf': acf_sd(spec, g, obs.ACF_LAGS), 'drift': drift_sd(spec, g)}
+            'acf': ex.acf_moments(spec, g, obs.ACF_LAGS, det)[1], 'drift': drift_sd(spec, g)}
