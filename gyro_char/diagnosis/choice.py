@@ -8,7 +8,7 @@ scatter each is judged by how well its *mean* curve follows this one realization
 Gauss-Markov process with a free correlation time does best. Among the candidates the gap has
 found significant, the choice is made here on the observables' Gaussian deviance under each
 candidate's OWN expectation and spread (closed forms: the chi-square EDF of the Allan variance,
-the Welch bins' chi-square, Bartlett, the exact variance of the linear drift forms),
+the Welch bins' chi-square, the acf's delta method, the exact variance of the drift forms),
 
     D = sum_j ((r_j - m_j) / s_j)^2 + 2 ln s_j   (+ ln(n_elements) per free parameter, BIC),
 
