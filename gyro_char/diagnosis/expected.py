@@ -21,8 +21,9 @@ form of the record, so its expectation is a linear functional of the model's PSD
 
 Spreads (``spread``): chi-square with the Welch and Allan equivalent degrees of freedom
 (Greenhall's EDF per component, combined by Satterthwaite), the delta method for the
-autocorrelation (``acf_moments``), the exact variance of the linear ``drift`` forms; the ``tone`` block (a
-running-median prominence, not linear) is sampled from the Welch bins' chi-square law.
+autocorrelation (``acf_moments``), the exact variance of the linear ``drift`` forms; the
+``tone`` block (a running-median prominence, not linear) is sampled from the Welch bins'
+chi-square law.
 """
 from dataclasses import dataclass
 from functools import lru_cache
