@@ -31,8 +31,9 @@ def forced(x, names):
         params, nuisance, ev = fit_on_top(objective, problem, selected, nuisance, spaces[name])
         selected.append((name, params))
     selected, nuisance, ev = backfit(objective, problem, selected, nuisance, ev)
-    needed = 2.0 * float(np.std(diag_gap.null_gaps(base.stats), ddof=1))
-    return prune(objective, problem, selected, nuisance, ev, base, needed)
+    null = diag_gap.null_gaps(base.stats)
+    return prune(objective, problem, selected, nuisance, ev, base,
+                 2.0 * float(np.std(null, ddof=1)), float(np.quantile(null, 0.95)))
 
 
 def test_a_warm_up_standing_in_for_a_walks_trend_is_dropped():

@@ -32,7 +32,7 @@ from gyro_char.diagnosis.choice import INDISTINGUISHABLE, refit_score
 from gyro_char.diagnosis.closed_form import ExpectedObjective
 from gyro_char.diagnosis.fit import EffectSpace, Evaluation, fit_effect, GapObjective
 from gyro_char.diagnosis.greedy import (
-    backfit, could_trail, fit_on_top, gap_in, look_alikes, prune, separating_run, yardstick)
+    backfit, could_trail, fit_on_top, gap_in, levels, look_alikes, prune, separating_run)
 from gyro_char.progress import progress
 import numpy as np
 
@@ -206,11 +206,8 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         # its own spread. Never below the baseline's levels: a 95th percentile of a few
         # repeats is noisy.
         scatters = [base, current]
-        null_now = diag_gap.null_gaps(
-            current.stats, yardstick=lambda k: yardstick(scatters, k))
-        explained = max(base_explained, float(np.quantile(null_now, 0.95)))
-        shrink_needed = max(base_needed, 2.0 * float(np.std(null_now, ddof=1)))
-        gap_now = gap_in(objective, current, scatters)
+        gap_now, shrink_needed, explained = levels(objective, base, current, base_needed,
+                                                   base_explained)
         if gap_now <= explained:
             break  # within what the current model scores against itself
         if step > 0:
@@ -277,8 +274,9 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
     if selected:
         selected, nuisance, current = backfit(objective, problem, selected, nuisance, current)
         if problem.prune:
-            selected, nuisance, current, dropped = prune(objective, problem, selected,
-                                                         nuisance, current, base, base_needed)
+            selected, nuisance, current, dropped = prune(
+                objective, problem, selected, nuisance, current, base, base_needed,
+                base_explained)
     evaluations['final'] = current
     model = selected + ([nuisance] if nuisance else [])
     return Diagnosis(

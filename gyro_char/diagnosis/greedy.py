@@ -125,6 +125,22 @@ def gap_in(objective, ev: Evaluation, scatters: Sequence[Evaluation]) -> float:
     return diag_gap.multi_gap(objective.reals, ev.stats, yardstick(scatters))
 
 
+def levels(objective, base: Evaluation, current: Evaluation, base_needed: float,
+           base_explained: float):
+    """
+    Return the gap now, the shrink a step must exceed and the gap the model explains.
+
+    All in the baseline's scatter widened where ``current`` is more variable (``yardstick``),
+    from what ``current``'s twins score against each other; never below the baseline's
+    levels (a 95th percentile of a few repeats is noisy).
+    """
+    scatters = [base, current]
+    null_now = diag_gap.null_gaps(current.stats, yardstick=lambda k: yardstick(scatters, k))
+    needed = max(base_needed, 2.0 * float(np.std(null_now, ddof=1)))
+    explained = max(base_explained, float(np.quantile(null_now, 0.95)))
+    return gap_in(objective, current, scatters), needed, explained
+
+
 def look_alikes(names: Sequence[str]) -> bool:
     """Tell whether every pair of ``names`` is a known look-alike pair (``SEPARATING_RUNS``)."""
     return all(frozenset({a, b}) in SEPARATING_RUNS
@@ -193,23 +209,21 @@ def backfit(objective, problem, selected: list, nuisance: Optional[tuple],
 
 
 def prune(objective, problem, selected: list, nuisance: Optional[tuple], current: Evaluation,
-          base: Evaluation, base_needed: float):
+          base: Evaluation, base_needed: float, base_explained: float):
     """
     Drop each selected effect that the others have made redundant (backward elimination).
 
     A greedy step adds the effect that shrinks the gap most given the earlier ones; a later
     effect may explain what an earlier one was only standing in for (a warm-up fitted to the
     trend of a random walk's one realization, before the walk itself). An effect is dropped
-    when the model without it, the others refitted, scores within the greedy bar (twice the
-    current model's null spread) of the model with it, judged in the yardstick of the model
-    with it. Cheapest removal first, one at a time, never the last effect.
+    when the model without it, the others refitted, scores within the greedy bar (``levels``)
+    of the model with it, judged in the yardstick of the model with it. Cheapest removal
+    first, one at a time, never the last effect.
     """
     dropped = []
     while len(selected) > 1:
         scatters = [base, current]
-        null_now = diag_gap.null_gaps(current.stats, yardstick=lambda k: yardstick(scatters, k))
-        needed = max(base_needed, 2.0 * float(np.std(null_now, ddof=1)))
-        gap_now = gap_in(objective, current, scatters)
+        gap_now, needed, _ = levels(objective, base, current, base_needed, base_explained)
         trials = []
         for k, (name, params) in enumerate(selected):
             rest = selected[:k] + selected[k + 1:]
