@@ -74,3 +74,22 @@ def test_simulated_runs_hold_the_share_and_length_and_are_found_in_the_record():
     # Single-sample holds: runs of two or more are a minority of the repeats.
     y = static.simulate_twin(BASE, 2 ** 18, [('stale_samples', {'p': 0.04})], 3)
     assert repeat_runs(y, LSB)[1] < 0.5
+
+
+@pytest.mark.parametrize('run', [60.0, 150.0])
+def test_long_runs_take_the_cosine_transform_and_agree_with_the_lag_by_lag_sum(
+        run, monkeypatch):
+    from gyro_char.diagnosis import holds
+    from gyro_char.diagnosis.spectra import model_spectrum
+    fx = [('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.2, 'order': 1.0}),
+          ('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}),
+          ('rate_random_walk', {'K': 3e-5}),
+          ('stale_samples', {'p': 0.2, 'run': run})]
+    f = np.geomspace(0.005, 50.0, 200)
+    spec = model_spectrum(7e-4, LSB, DT, fx)
+    assert spec.holds.lags() > holds.FFT_LAGS           # the transform's path
+    fast = spec.one_sided(f)
+    monkeypatch.setattr(holds, 'FFT_LAGS', 10 ** 9)
+    slow = model_spectrum(7e-4, LSB, DT, fx).one_sided(f)
+    # 1e-6 and 4e-6 apart (5e-5 at runs of 1000, 2e4 lags, 60 times faster).
+    np.testing.assert_allclose(fast, slow, rtol=1e-4)

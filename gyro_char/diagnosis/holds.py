@@ -37,8 +37,12 @@ from typing import Sequence, Tuple
 
 from gyro_char.sim.effects.timing import hold_chain
 import numpy as np
+from scipy import fft, signal
 
 GRID = 1 << 14      # points of the integrals behind the holds' broadband share
+# Beyond this many lags the half variogram comes from the first difference's spectrum by one
+# cosine transform (``_half_variogram_fft``) instead of a lag-by-lag sum on the grid.
+FFT_LAGS = 1024
 
 
 @dataclass(frozen=True)
@@ -124,17 +128,16 @@ class Holds:
         rv = _half_variogram(f, s, f0, power, dt, k.size)
         w = np.r_[1.0, a * c ** np.arange(depth)]            # w(0) = 1, w(e) = a c^(e-1)
         # Q(j) = sum_(d >= 1) pi_0 a c^(d-1) Rv(j + d): a backward recursion.
-        q = np.zeros(k.size)
-        for j in range(k.size - 2, -1, -1):
-            q[j] = pi0 * a * rv[j + 1] + c * q[j + 1]
+        q = signal.lfilter([0.0, pi0 * a], [1.0, -c], rv[::-1])[::-1]
         j = np.arange(m_max)
         v0 = np.where(j > 0, (pi0 + (1.0 - pi0) * lam ** j) * rv[:m_max], 0.0)
         v1 = np.where(j > 0, pi0 * (1.0 - lam ** j) * q[:m_max], 0.0)
-        exact = pi0 * np.convolve(w, v0)[:m_max] + np.convolve(w, v1)[:m_max]
+        exact = (pi0 * signal.convolve(w, v0)[:m_max]
+                 + signal.convolve(w, v1)[:m_max])
         g = pi0 * w
-        rho = np.correlate(g, g, mode='full')                # lags -(len-1) .. len-1
+        rho = signal.correlate(g, g, mode='full')            # lags -(len-1) .. len-1
         full = np.r_[rv[::-1], rv[1:]]                       # Rv(-K) .. Rv(K)
-        conv = np.convolve(full, rho[::-1], mode='same')
+        conv = signal.convolve(full, rho[::-1], mode='same')
         centre = rv.size - 1
         return exact - conv[centre:centre + m_max]
 
@@ -171,9 +174,12 @@ def _half_variogram(f, s, f0, power, dt: float, count: int) -> np.ndarray:
     Return -D(k) / 2 = integral of S (cos(w k) - 1), k = 0 .. count - 1, plus the lines'.
 
     cos(w k) - 1 by the Chebyshev recurrence from the exact -2 sin^2(w / 2): one vector
-    operation a lag instead of a sine matrix, no cancellation where w k is small.
+    operation a lag instead of a sine matrix, no cancellation where w k is small. Beyond
+    ``FFT_LAGS`` lags (long runs of holds): ``_half_variogram_fft``.
     """
     f = np.asarray(f, dtype=np.float64)
+    if count > FFT_LAGS:
+        return _half_variogram_fft(f, s, f0, power, dt, count)
     step = np.diff(f)
     ws = np.zeros(f.size)
     ws[:-1] += 0.5 * step
@@ -187,9 +193,7 @@ def _half_variogram(f, s, f0, power, dt: float, count: int) -> np.ndarray:
         out[j] = float(np.dot(ws, cur))
         prev, cur = cur, two_cos * cur - prev + 2.0 * c1
     if np.size(f0):
-        kk = np.arange(count)
-        out += (np.asarray(power)[:, None]
-                * (-2.0 * np.sin(np.pi * np.asarray(f0)[:, None] * dt * kk) ** 2)).sum(axis=0)
+        out += _line_half_variogram(f0, power, dt, count)
     return out
 
 
@@ -270,3 +274,42 @@ def _steps(x: np.ndarray, lsb: float) -> np.ndarray:
     """Return the record's first differences in output steps (as they are where ``lsb`` 0)."""
     d = np.diff(np.asarray(x, dtype=np.float64))
     return np.round(d / lsb) if lsb > 0.0 else d
+
+
+def _line_half_variogram(f0, power, dt: float, count: int) -> np.ndarray:
+    """Return the lines' part of -D(k) / 2, k = 0 .. count - 1."""
+    kk = np.arange(count)
+    return (np.asarray(power)[:, None]
+            * (-2.0 * np.sin(np.pi * np.asarray(f0)[:, None] * dt * kk) ** 2)).sum(axis=0)
+
+
+def _half_variogram_fft(f, s, f0, power, dt: float, count: int) -> np.ndarray:
+    """
+    Return ``_half_variogram`` for many lags through the first difference's spectrum.
+
+    D(k) = integral of U F_k, U = 4 S sin^2(pi f dt) the first difference's PSD (bounded
+    where S has a random walk's 1 / f^2) and F_k = sin^2(pi f k dt) / sin^2(pi f dt) =
+    sum_(|j| < k) (k - |j|) cos(2 pi f j dt) Fejer's kernel: D(k) = sum_(|j| < k) (k - |j|)
+    r_U(j), two running sums of U's autocovariance r_U. U is taken piecewise linear on M + 1
+    uniform points (from the grid, which keeps narrow peaks), whose cosine coefficients are
+    exact: a DCT-I times sinc^2(j h), h the spacing in cycles a sample; M is at least 8 count
+    (2^17 or more).
+    """
+    u = 4.0 * s * _s2(f, dt)
+    bins = 1 << max(17, int(np.ceil(np.log2(8 * count))))
+    nu = np.linspace(0.0, 0.5, bins + 1)
+    fine = np.interp(nu, f * dt, u)
+    # Below the grid's first point U follows the power law of its first two points (S as
+    # f^-a, a in [0, 2]: 0 at f = 0 unless S has a random walk's 1 / f^2).
+    low = nu < f[0] * dt
+    slope = np.log(max(u[1], 1e-300) / max(u[0], 1e-300)) / np.log(f[1] / f[0])
+    fine[low] = u[0] * (nu[low] / (f[0] * dt)) ** float(np.clip(slope, 0.0, 2.0))
+    h = 0.5 / bins
+    j = np.arange(count)
+    r_u = (0.5 * h / dt) * fft.dct(fine, type=1)[:count] * np.sinc(j * h) ** 2
+    c = np.cumsum(np.r_[r_u[0], 2.0 * r_u[1:]])          # C(i) = sum_(|j| <= i) r_U(j)
+    d = np.r_[0.0, np.cumsum(c)[:count - 1]]             # D(k) = sum_(i < k) C(i)
+    out = -0.5 * d
+    if np.size(f0):
+        out += _line_half_variogram(f0, power, dt, count)
+    return out
