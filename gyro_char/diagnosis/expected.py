@@ -163,12 +163,13 @@ def avar(spec: ModelSpectrum, g: Grids, parts=None) -> np.ndarray:
     top = PERIODS / g.m
     tail = top < 0.5
     out[tail] += (cum[-1] - np.interp(top[tail], nu, cum)) / (g.m[tail] * g.m[tail])
-    if parts is None:
-        for f0, power in spec.lines:
-            x = f0 * dt
-            if np.sin(np.pi * x) ** 2 < 1e-12:
-                continue        # a line at DC: the record's line fit removes it
-            out += power * 2.0 * np.sin(np.pi * x * g.m) ** 4 / (g.m ** 2 * np.sin(np.pi * x) ** 2)
+    if parts is None and spec.lines:
+        f0, power = (np.array(v, dtype=np.float64) for v in zip(*spec.lines))
+        x = f0 * dt
+        s2 = np.sin(np.pi * x) ** 2
+        ok = s2 >= 1e-12        # a line at DC: the record's line fit removes it
+        m = np.asarray(g.m, dtype=np.float64)
+        out += (power[ok] / s2[ok]) @ (2.0 * np.sin(np.pi * np.outer(x[ok], m)) ** 4) / (m * m)
     return out
 
 
@@ -225,16 +226,30 @@ def line_bins(lines, dt: float, nps: int) -> np.ndarray:
 
 
 def _dirichlet(v, L):
-    """sum_(j<L) exp(-2 pi i v j)."""
-    z = np.exp(-2j * np.pi * np.asarray(v, dtype=np.float64))
-    near = np.abs(1.0 - z) < 1e-12
-    return np.where(near, L, (1.0 - z ** L) / np.where(near, 1.0, 1.0 - z))
+    """sum_(j<L) exp(-2 pi i v j) = (1 - z^L) / (1 - z), z = exp(-2 pi i v)."""
+    v = np.asarray(v, dtype=np.float64)
+    den = 1.0 - np.exp(-2j * np.pi * v)
+    near = np.abs(den) < 1e-12
+    return np.where(near, L, (1.0 - np.exp(-2j * np.pi * L * v)) / np.where(near, 1.0, den))
 
 
 def _hann_w(nu, L):
-    """DFT W(nu) of the periodic Hann window of length L (cycles/sample)."""
-    return 0.5 * _dirichlet(nu, L) - 0.25 * _dirichlet(nu - 1.0 / L, L) \
-        - 0.25 * _dirichlet(nu + 1.0 / L, L)
+    """
+    DFT W(nu) of the periodic Hann window of length L (cycles/sample).
+
+    0.5 D(nu) - 0.25 D(nu - 1 / L) - 0.25 D(nu + 1 / L), D(v) = sum_(j<L) exp(-2 pi i v j) =
+    (1 - z^L) / (1 - z), z = exp(-2 pi i v): the three share z^L (a shift of 1 / L turns it
+    by a whole cycle), so two complex exponentials serve all three.
+    """
+    v = np.asarray(nu, dtype=np.float64)
+    z = np.exp(-2j * np.pi * v)
+    num = 1.0 - np.exp(-2j * np.pi * L * v)
+    out = np.zeros(v.shape, dtype=np.complex128)
+    for weight, shift in ((0.5, 0.0), (-0.25, 1.0 / L), (-0.25, -1.0 / L)):
+        den = 1.0 - z * np.exp(2j * np.pi * shift)        # 1 - exp(-2 pi i (v - shift))
+        near = np.abs(den) < 1e-12
+        out += weight * np.where(near, L, num / np.where(near, 1.0, den))
+    return out
 
 
 def _hann_w2(nu, L):
@@ -250,10 +265,11 @@ def acf_integrals(spec: ModelSpectrum, g: Grids, lags: int):
     r0 = _trapz(s * keep, nu)
     k = np.arange(1, lags + 1)
     dk = 4.0 * (np.sin(np.pi * np.outer(k, nu)) ** 2 @ (s * _trapz_weights(nu)))  # 2(1 - cos)
-    for f0, power in spec.lines:
+    if spec.lines:
+        f0, power = (np.array(v, dtype=np.float64) for v in zip(*spec.lines))
         x = f0 * g.dt
-        r0 += power * float(_detrend_keep(np.array([x * g.n]))[0])
-        dk += 2.0 * power * (1.0 - np.cos(2.0 * np.pi * x * k))
+        r0 += float(power @ _detrend_keep(x * g.n))
+        dk += 2.0 * (1.0 - np.cos(2.0 * np.pi * np.outer(k, x))) @ power
     return r0, dk
 
 
@@ -289,12 +305,13 @@ def acf_moments(spec: ModelSpectrum, g: Grids, lags: int, det: Deterministic = N
         s2 = (spec.one_sided(nu / g.dt) / g.dt) ** 2 * _trapz_weights(nu) / g.n
         w = 4.0 * np.sin(np.pi * np.outer(k, nu)) ** 2
         v0, v_d, c = v0 + float(s2.sum()), v_d + (w * w) @ s2, c + w @ s2
-    for f0, power in spec.lines:   # a line's bin: noise and line, a cross term 2 a P
+    if spec.lines:                 # a line's bin: noise and line, a cross term 2 a P
+        f0, power = (np.array(v, dtype=np.float64) for v in zip(*spec.lines))
         nu0 = f0 * g.dt
-        keep = float(_detrend_keep(np.array([nu0 * g.n]))[0])
-        cross = 2.0 * power * keep * float(spec.one_sided(np.array([f0]))[0]) / g.dt * keep / g.n
-        w = 4.0 * np.sin(np.pi * k * nu0) ** 2
-        v0, v_d, c = v0 + cross, v_d + w * w * cross, c + w * cross
+        keep = _detrend_keep(nu0 * g.n)
+        cross = 2.0 * power * keep * spec.one_sided(f0) / g.dt * keep / g.n
+        w = 4.0 * np.sin(np.pi * np.outer(k, nu0)) ** 2
+        v0, v_d, c = v0 + float(cross.sum()), v_d + (w * w) @ cross, c + w @ cross
     ratio = mu_d / (2.0 * mu0)
     rel0, cov = v0 / mu0 ** 2, c / (mu_d * mu0)
     mean = (1.0 - k / g.n) * (1.0 - ratio * (1.0 + rel0 - cov))
