@@ -44,8 +44,11 @@ def test_unreachable_scheduler_is_a_one_line_error(tmp_path, capsys):
     pytest.importorskip('distributed')
     csv = tmp_path / 'rec.csv'
     _write_csv(csv, n=2048)
-    rc = main(['diagnose', '--kind', 'static', str(csv), '--out', str(tmp_path / 'o'),
-               '--scheduler', 'tcp://127.0.0.1:9', '--quiet'])
+    import dask
+    # Dask's own connect timeout (30 s by default) is how long a scheduler is tried.
+    with dask.config.set({'distributed.comm.timeouts.connect': '3s'}):
+        rc = main(['diagnose', '--kind', 'static', str(csv), '--out', str(tmp_path / 'o'),
+                   '--scheduler', 'tcp://127.0.0.1:9', '--quiet'])
     assert rc == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'scheduler' in err[0]

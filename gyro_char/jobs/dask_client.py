@@ -3,7 +3,9 @@ One way to get a Dask client: a local cluster of worker processes, or an existin
 
 Used by the fleet (many recordings) and by ``gyro-char diagnose --scheduler`` (its channels and
 records). An address is ``tcp://HOST:PORT`` or the path of a scheduler file; a local cluster
-listens on the loopback interface only.
+listens on the loopback interface only. How long to try a scheduler is Dask's own setting
+``distributed.comm.timeouts.connect`` (30 s unless set, e.g. by the environment variable
+``DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT=5s``).
 """
 from contextlib import contextmanager
 import logging
@@ -12,8 +14,6 @@ from typing import Iterator, Optional
 
 from gyro_char.errors import InputError
 
-CONNECT_TIMEOUT_S = 30
-
 
 def _client(workers: Optional[int], scheduler: Optional[str]):
     from distributed import Client, LocalCluster
@@ -21,8 +21,8 @@ def _client(workers: Optional[int], scheduler: Optional[str]):
     if scheduler:
         try:
             if os.path.isfile(scheduler):
-                return Client(scheduler_file=scheduler, timeout=CONNECT_TIMEOUT_S), None
-            return Client(scheduler, timeout=CONNECT_TIMEOUT_S), None
+                return Client(scheduler_file=scheduler), None
+            return Client(scheduler), None
         except (OSError, TimeoutError, ValueError) as exc:
             raise InputError(f'cannot reach the Dask scheduler {scheduler}: '
                              f'{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}'
