@@ -39,6 +39,10 @@ PRESET = 'adis16405'  # only its structure is used: every number that matters is
 # their mean length up to RUN_MAX samples.
 RUN_SHARE = 0.5
 RUN_MAX = 2000.0
+# Every hold form repeats its held share of samples exactly, so where the record's excess of
+# exact repeats is measured, the held share is searched within this factor of it (or within
+# REPEAT_Z standard errors, whichever is wider).
+SHARE_SLACK = 1.5
 
 
 @dataclass
@@ -254,15 +258,25 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         'resonance': resonance_space(sig_sample, f_tone, dt, obs.broad_peak(psd)),
     }
     # Holds: searched where the record repeats samples exactly beyond what its rounding does
-    # (``holds.repeat_excess``; everywhere if the step is too coarse to tell). p from a lag-1
-    # correlation about its standard error 1 / sqrt(n) up to one sample in two (below one in
-    # two if never two in a row), started at the excess of repeats, else at the record's
-    # lag-1 correlation (p, on white noise; the coarse grid steps by a factor 4).
+    # (``holds.repeat_excess``; everywhere if the step is too coarse to tell). Where the
+    # excess is measured, p lies within SHARE_SLACK of it (a hold model must repeat as many
+    # samples as the record does: a smoother whose spectrum a share of 0.2 mimics, with 0.5 %
+    # of repeats, is no hold), started there; else p from a lag-1 correlation about its
+    # standard error 1 / sqrt(n) up to one sample in two (below one in two if never two in a
+    # row), started at the record's lag-1 correlation (p, on white noise; the coarse grid
+    # steps by a factor 4).
     excess, excess_se = repeat_excess(x, base.lsb)
-    if not excess_se > 0.0 or excess > REPEAT_Z * excess_se:
-        start = excess if excess_se > 0.0 else float(np.dot(y[:-1], y[1:]) / np.dot(y, y))
-        p_lo = 1.0 / np.sqrt(n)
-        p_param = Param('p', p_lo, 0.45, init=min(max(start, p_lo), 0.45))
+    p_lo, p_hi = 1.0 / np.sqrt(n), 0.45
+    if excess_se > 0.0:
+        start = excess
+        p_lo = max(p_lo, min(excess / SHARE_SLACK, excess - REPEAT_Z * excess_se))
+        p_hi = min(p_hi, max(excess * SHARE_SLACK, excess + REPEAT_Z * excess_se))
+    else:
+        start = float(np.dot(y[:-1], y[1:]) / np.dot(y, y))
+    # Not searched where the excess is within noise, nor where it exceeds every share searched
+    # (more repeats than one sample in two: a coarse lattice, not holds).
+    if (not excess_se > 0.0 or excess > REPEAT_Z * excess_se) and p_lo < p_hi:
+        p_param = Param('p', p_lo, p_hi, init=min(max(start, p_lo), p_hi))
         spaces['stale_samples'] = EffectSpace('stale_samples', [
             p_param, Param('isolated', 0, 1, integer=True, choice=True)])
         # Runs of holds (a frozen register): where most exact repeats come in runs of two or
