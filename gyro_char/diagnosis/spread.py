@@ -7,7 +7,7 @@ Sampling spread of the static observables of a twin, in closed form (the gap's y
   Lines and the deterministic mean term add no spread.
 - ``psd`` (log10 of a bin mean): each Welch bin is chi-square with 2 k_eff degrees of freedom;
   neighbouring Hann bins correlate by 4/9 and 1/36; a line adds its cross term with the noise.
-- ``tone``: spread of the chi-square draws (``expected.tone_block``).
+- ``tone``: spread of the chi-square draws (``expected_tone.tone_block``).
 - ``acf``: the delta method over the periodogram's bins (``expected.acf_moments``).
 - ``drift``: the exact variance of each linear form (record minus its line, early minus late
   mean), as the integral of the PSD against the form's |C(f)|^2.
@@ -16,7 +16,7 @@ from functools import lru_cache
 from typing import Dict
 
 from gyro_char.allan.edf import edf_oadev
-from gyro_char.diagnosis import expected as ex
+from gyro_char.diagnosis import expected as ex, expected_tone
 from gyro_char.diagnosis import observables as obs
 import numpy as np
 from scipy import special
@@ -107,6 +107,6 @@ def spreads(spec, layout, det=None) -> Dict[str, np.ndarray]:
             prod = sd[b[lag:]] * sd[b[:b.size - lag]]
             v += (1.0 if lag == 0 else 2.0) * rho * float(prod.sum())
         psd.append(np.sqrt(v) / b.size / (total[b].mean() * LN10))
-    tone = ex.tone_block(noise, lines, g, layout).std(axis=0, ddof=1)
+    tone = expected_tone.tone_block(noise, lines, g, layout).std(axis=0, ddof=1)
     return {'adev': sd_adev, 'psd': np.array(psd), 'tone': tone,
             'acf': ex.acf_moments(spec, g, obs.ACF_LAGS, det)[1], 'drift': drift_sd(spec, g)}

@@ -10,7 +10,7 @@ built from, and check the closed forms on this very record.
 from dataclasses import replace
 from typing import Sequence
 
-from gyro_char.diagnosis import expected, spread
+from gyro_char.diagnosis import expected, expected_tone, spread
 from gyro_char.diagnosis import gap as diag_gap
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis import static as ds
@@ -98,7 +98,7 @@ def calibrate_n(base, x: np.ndarray):
     noise, _ = expected.welch_expected(model_spectrum(base.N, base.lsb, base.dt, []), g)
     f = np.arange(noise.size) / (g.nps * g.dt)
     band = (f >= 0.01 / base.dt) & (f <= 0.05 / base.dt)
-    med = float(expected.tone_draws(noise.size, round(g.k_eff, 1))[2])
+    med = float(expected_tone.tone_draws(noise.size, round(g.k_eff, 1))[2])
     white_out = base.lsb ** 2 / 12.0 * base.dt * 2.0
     model_white = float(np.median(noise[band])) - white_out
     real_white = real / med - white_out
