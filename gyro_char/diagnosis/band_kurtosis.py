@@ -8,7 +8,9 @@ amplitude: a sinusoid of random phase has excess kurtosis -3/2, and a band of to
 P holding Gaussian noise and independent lines of powers P_i has
     kappa = -1.5 * sum(P_i^2) / P^2,
 whatever the lines' frequencies. A wandering or beating tone spreads its power in the
-spectrum like a mode, but keeps a steady envelope; the fourth moment tells the two apart.
+spectrum like a mode, but keeps a steady envelope; the fourth moment tells the two apart
+(``vibration``'s ``wander_hz``: a share q of its power in a band adds (1.5 q - 3 q^2) P^2 to
+the band's fourth cumulant, exact for slow wander).
 Not modelled: ``stale_samples``' holds, a random map whose output is a Gaussian scale
 mixture with a positive excess kurtosis (+0.3 near Nyquist at p = 0.3, isolated holds); the
 expectation stays the Gaussian one there.
@@ -31,7 +33,7 @@ line power at the strongest line's frequency stands for all of them). Gaussian a
 from math import factorial
 from typing import Sequence, Tuple
 
-from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis import observables as obs, wander
 import numpy as np
 
 LAGS = 4096        # lag grid of the band's autocorrelation (periodic; rho falls as 1 / k)
@@ -41,6 +43,10 @@ POINTS = 512       # PSD samples across a band
 # this much excess kurtosis (a 2 h record's sd is ~0.015: rounding leaves a few hundredths).
 REPORT_Z = 6.0
 REPORT_EXCESS = 0.1
+# Relative spread taken for a wandering tone's kurtosis term (its share of a band varies with
+# the time the frequency spends there): where it stays, where it only visits.
+ENVELOPE_REL = 0.03
+VISIT_REL = 0.5
 
 
 def band_ranges(n: int, dt: float) -> np.ndarray:
@@ -74,16 +80,40 @@ def record_kurtosis(x: np.ndarray, dt: float, ranges: np.ndarray) -> np.ndarray:
 
 
 def _band_models(spec, ranges) -> list:
-    """Per band: the Gaussian part's PSD across it, its power, and the lines inside."""
+    """
+    Per band: the Gaussian part's PSD across it, its power, the lines inside, and more.
+
+    The more: the wandering tones' (``spec.envelopes``) power in the band, their fourth
+    cumulant there and its spread.
+    """
     ranges = np.asarray(ranges, dtype=float)
     u = (np.arange(POINTS) + 0.5) / POINTS
     f = ranges[:, :1] + u * (ranges[:, 1:] - ranges[:, :1])
-    s = np.maximum(spec.one_sided(f.ravel()), 0.0).reshape(f.shape)
+    envelopes = getattr(spec, 'envelopes', [])
+    parts = None
+    if envelopes:
+        skip = {e[4] for e in envelopes}
+        parts = [i for i in range(len(spec.internal)) if i not in skip]
+    s = np.maximum(spec.one_sided(f.ravel(), parts), 0.0).reshape(f.shape)
     out = []
     for (lo, hi), row in zip(ranges, s):
         inside = [(f0, p) for f0, p in spec.lines if lo <= f0 < hi and p > 0.0]
+        # A wandering tone has a share q of its power in the band. Slow wander (beta > 1):
+        # there a share q of the time, its band signal the tone or nothing, fourth cumulant
+        # (1.5 q - 3 q^2) P^2 (negative where it stays, positive where it visits). Fast
+        # wander: a Lorentzian line whose tails are noise-like, -1.5 q^2 P^2. The spread
+        # taken is ENVELOPE_REL of the term where it stays, VISIT_REL where it visits (the
+        # band edge's transition makes the visit term approximate; neither derived).
+        env_power, env_c4, env_sd = 0.0, 0.0, 0.0
+        for f0, power, w, tau, _ in envelopes:
+            q = min(max(wander.band_share(lo, hi, f0, w, tau), 0.0), 1.0)
+            slow = (2.0 * np.pi * w * tau) ** 2 > 1.0
+            c4 = ((1.5 * q - 3.0 * q * q) if slow else -1.5 * q * q) * power * power
+            env_power += q * power
+            env_c4 += c4
+            env_sd += (ENVELOPE_REL if q >= 0.5 else VISIT_REL) * abs(c4)
         out.append((row, float(row.mean()) * (hi - lo), np.array([p for _, p in inside]),
-                    [f0 for f0, _ in inside]))
+                    [f0 for f0, _ in inside], env_power, env_c4, env_sd))
     return out
 
 
@@ -145,16 +175,36 @@ def expected_kurtosis(spec, n: int, dt: float, ranges: Sequence,
     With ``spread``, return (mean, standard deviation).
     """
     mean, sd = np.zeros(len(ranges)), np.zeros(len(ranges))
-    for i, ((lo, hi), (shape, p_g, powers, where)) in enumerate(
+    for i, ((lo, hi), (shape, p_g, powers, where, env_power, env_c4, env_sd)) in enumerate(
             zip(ranges, _band_models(spec, ranges))):
         a, b = _band_bins(n, dt, lo, hi)
-        total = p_g + float(powers.sum())
+        total = p_g + float(powers.sum()) + env_power
         if b - a < 8 or total <= 0.0:
             continue
-        mean[i] = -1.5 * float(np.sum(powers ** 2)) / (total * total)
+        env = env_c4 / (total * total)
+        mean[i] = -1.5 * float(np.sum(powers ** 2)) / (total * total) + env
         if spread:
-            sd[i] = _band_sd(shape, p_g, powers, where, lo, hi, b - a)
+            sd[i] = float(np.hypot(_band_sd(shape, p_g, powers, where, lo, hi, b - a),
+                                   env_sd / (total * total)))
     return (mean, sd) if spread else mean
+
+
+def steady_envelope(x: np.ndarray, dt: float, f0: float, spec) -> bool:
+    """
+    Whether the record's band holding ``f0`` Hz has a steadier envelope than ``spec`` makes.
+
+    Its excess kurtosis below the model's (the baseline's: Gaussian) by REPORT_Z standard
+    deviations and REPORT_EXCESS: a line or a wandering tone, not noise.
+    """
+    y = obs.detrend(np.asarray(x, dtype=np.float64))
+    ranges = band_ranges(y.size, dt)
+    inside = np.flatnonzero((ranges[:, 0] <= f0) & (f0 < ranges[:, 1]))
+    if not inside.size:
+        return False
+    band = ranges[inside[:1]]
+    got = record_kurtosis(y, dt, band)[0]
+    mean, sd = expected_kurtosis(spec, y.size, dt, band, spread=True)
+    return bool(got - mean[0] < -max(REPORT_Z * sd[0], REPORT_EXCESS))
 
 
 def non_gaussian_bands(x: np.ndarray, dt: float, spec) -> list:

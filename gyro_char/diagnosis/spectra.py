@@ -10,9 +10,9 @@ stage has an exact discrete-time PSD, so the twin's output PSD is
     S_out(f) = sum_r |H(f + r fs)|^2 S_int(f + r fs) + S_q(f) + S_lsb(f),   r = 0..D-1
 
 (decimation folds the D images of the internal band; two-sided, per Hz). Tones are lines,
-folded the same way; a warm-up is a deterministic mean term. Stale samples (an output sample
-repeating the previous one) act last, on the whole output (``holds.Holds``). ``ModelSpectrum``
-holds the result
+folded the same way, but a tone whose frequency wanders is a noise part (``wander``); a
+warm-up is a deterministic mean term. Stale samples (an output sample repeating the previous
+one) act last, on the whole output (``holds.Holds``). ``ModelSpectrum`` holds the result
 for one model; every observable's expectation is a linear functional of it
 (``gyro_char.diagnosis.expected``). The output step is taken as white rounding noise
 (lsb^2 / 12 per sample), exact enough when the per-sample noise exceeds half a step.
@@ -23,6 +23,7 @@ import threading
 from typing import Callable, List, Optional, Sequence, Tuple
 
 from gyro_char.allan.expected import moving_average_kernel
+from gyro_char.diagnosis import wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines
@@ -127,6 +128,10 @@ class ModelSpectrum:
     peaks: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, width) to resolve
     holds: Optional[Holds] = None        # stale samples; ``lines`` are then the held ones
     unheld_lines: List[Tuple[float, float]] = field(default_factory=list)
+    # Noise parts with a constant envelope (a wandering tone: a line's fourth moment, a
+    # noise's spectrum; ``band_kurtosis``): (f_out, mean square, wander_hz, wander_s, index
+    # in ``internal``).
+    envelopes: List[tuple] = field(default_factory=list)
     _hold_terms: dict = field(default_factory=dict, repr=False)
 
     def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
@@ -247,6 +252,23 @@ class ModelSpectrum:
         return amp * np.exp(-since / tau)
 
 
+def _add_wandering_tone(spec: ModelSpectrum, power: float, f0: float, wander_hz: float,
+                        wander_s: float) -> None:
+    """Add a tone of wandering frequency (``wander``) as a noise part, its envelope noted."""
+    fs = 1.0 / spec.dt_i
+    f_i = float(fold(f0, fs))
+
+    def psd(s2):
+        f = np.arcsin(np.sqrt(np.minimum(s2, 1.0))) / (np.pi * spec.dt_i)
+        return (wander.tone_psd(f, power, f_i, wander_hz, wander_s)
+                + wander.tone_psd(fs - f, power, f_i, wander_hz, wander_s))
+    spec.internal.append(psd)
+    f_out = float(fold(f_i, 1.0 / spec.dt))
+    spec.peaks.append((f_out, wander.spread_hz(wander_hz, wander_s)))
+    spec.envelopes.append((f_out, power * float(spec.h2(np.array([f_i]))[0]), wander_hz,
+                           wander_s, len(spec.internal) - 1))
+
+
 def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> ModelSpectrum:
     """
     Return the output spectrum of a static twin: white rate noise N, output step, ``effects``.
@@ -283,6 +305,12 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
             spec.angle_var += p['step_rad'] ** 2 / (6.0 if p.get('dither', 0.0) else 12.0)
         elif name == 'vibration':
             lines = vibration_lines(p)
+            if p.get('wander_hz', 0.0) > 0.0 and not p.get('spacing_hz', 0.0) > 0.0:
+                (f0, a), lines = lines[0], lines[1:]
+                _add_wandering_tone(spec, 0.5 * a * a, f0, p['wander_hz'],
+                                    p.get('wander_s', 10.0))
+                if not lines:
+                    continue
             fa = fold(np.array([f for f, _ in lines]), 1.0 / dt_i)
             power = 0.5 * np.array([a for _, a in lines]) ** 2 * spec.h2(fa)
             spec.lines.extend(zip(fold(fa, 1.0 / dt).tolist(), power.tolist()))

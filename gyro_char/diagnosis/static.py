@@ -16,9 +16,11 @@ from dataclasses import asdict, dataclass, replace
 from typing import List, Optional, Sequence
 
 from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis.band_kurtosis import steady_envelope
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.holds import Holds, repeat_excess, repeat_runs, REPEAT_Z
+from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.diagnosis.starts import markov_start
 from gyro_char.diagnosis.static_bands import resonance_space, vibration_space, with_gap_band
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
@@ -190,6 +192,10 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
     df = 1.0 / (obs.welch_segment(n) * dt)
     lines, levels = obs.narrow_lines(x, dt, psd=psd)
+    # A wandering tone only where the peak's band has a steadier envelope than noise: the
+    # form can mimic a mode's band, which only the fourth moment tells apart.
+    wander = bool(tones.size) and steady_envelope(
+        x, dt, f_tone, model_spectrum(base.N, base.lsb, dt, []))
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
@@ -254,7 +260,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
         # line between bins spreads its power differently from one on a bin). Where the PSD
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
-                                     lines, levels),
+                                     lines, levels, wander=wander),
         'resonance': resonance_space(sig_sample, f_tone, dt, obs.broad_peak(psd)),
     }
     # Holds: searched where the record repeats samples exactly beyond what its rounding does

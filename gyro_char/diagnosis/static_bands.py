@@ -78,13 +78,16 @@ def _centre_in(space: EffectSpace, f: float) -> bool:
 
 
 def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
-                    lines: Sequence[float], levels: Sequence[float]) -> EffectSpace:
+                    lines: Sequence[float], levels: Sequence[float],
+                    wander: bool = False) -> EffectSpace:
     """
     ``vibration``'s search: the tone at the strongest narrow peak; combs and tones if shown.
 
     ``lines``, ``levels``: the record's narrow lines, strongest first, and their amplitudes
     (``observables.narrow_lines``).
-    Where three or more sit on one lattice (``observables.comb_of``), a comb about the
+    With ``wander`` (the peak's band has a steady envelope: ``band_kurtosis``), a tone
+    whose frequency wanders (``wander_hz``, ``wander_s``) about the peak is one alternative
+    start. Where three or more sit on one lattice (``observables.comb_of``), a comb about the
     strongest is an alternative start: lines at centre + k spacing under a Lorentzian
     envelope whose width is fitted (a tone is its narrow limit). Where two or more lines
     show, the three strongest as unrelated tones are another, each amplitude fitted within a
@@ -98,6 +101,14 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
             if f_tone is not None else Param('freq_hz', 0.125 / dt, 0.375 / dt, log=False))
     lines = np.asarray(lines, dtype=float)
     others = []
+    if f_tone is not None and wander:
+        # A machine whose speed wanders: the tone spread over a band (``wander``) like a
+        # mode's, with a steady envelope; its centre searched as a mode's (+-15 %).
+        others.append(EffectSpace('vibration', [
+            amplitude, Param('freq_hz', 0.85 * f_tone, min(1.15 * f_tone, 0.45 / dt),
+                             log=False, init=f_tone),
+            Param('wander_hz', max(0.25 * df, 1e-3), 0.15 * f_tone),
+            Param('wander_s', 0.05, 300.0)], passes=2))
     comb = obs.comb_of(lines, df)
     if comb is not None:
         centre, spacing = comb

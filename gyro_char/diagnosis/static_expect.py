@@ -14,9 +14,9 @@ from gyro_char.diagnosis import expected, expected_tone, spread
 from gyro_char.diagnosis import gap as diag_gap
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis import static as ds
-from gyro_char.diagnosis.choice import Criterion
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
 from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.kurtosis_choice import KurtosisCriterion
 from gyro_char.diagnosis.spectra import model_spectrum
 import numpy as np
 
@@ -133,5 +133,7 @@ def closed_form_problem(records, dt, *, channel='gyro_x', max_samples=None,
             for i in range(len(recs))]
     problem.check = exp.calibrate(sims)
     problem.expect = exp
-    problem.choose = Criterion(problem.reals, problem.spaces)
+    # Among significant candidates: the own-spread deviance plus the bands' kurtosis (a
+    # steady envelope is a line's or a wandering tone's, not a mode's: ``kurtosis_choice``).
+    problem.choose = KurtosisCriterion(problem.reals, problem.spaces, recs, dt, exp.spectrum)
     return problem

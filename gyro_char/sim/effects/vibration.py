@@ -59,11 +59,17 @@ class Vibration(Effect):
                '> 0, a periodic non-sinusoidal disturbance: lines at freq_hz + k spacing_hz, '
                'each of its own random phase, power amplitude^2 / 2 / (1 + (k spacing_hz / '
                'width_hz)^2) (knocks, kicks, gear-mesh sidebands, a frequency-modulated drive). '
-               'freq2_hz / freq3_hz: further tones of their own amplitudes (other machines).')
+               'freq2_hz / freq3_hz: further tones of their own amplitudes (other machines). '
+               'wander_hz > 0 (one tone): a machine whose speed is not held, the frequency '
+               'freq_hz + wander_hz u(t), u a unit Gauss-Markov process of correlation time '
+               "wander_s: the power spreads over a band (the frequency's own law when slow, a "
+               'Lorentzian line when fast), the envelope stays constant.')
     PARAMS = {'freq_hz': (19.0, 'Hz', "tone frequency (the comb's centre line)"),
               'amplitude': (0.05 * DEG, 'rad/s', "tone amplitude (the centre line's)"),
               'spacing_hz': (0.0, 'Hz', 'comb line spacing; 0 = one tone'),
               'width_hz': (1.0, 'Hz', "half width of the comb's Lorentzian power envelope"),
+              'wander_hz': (0.0, 'Hz', "rms wander of the tone's frequency (0 = held)"),
+              'wander_s': (10.0, 's', "correlation time of the frequency's wander"),
               'freq2_hz': (0.0, 'Hz', 'a second, unrelated tone (0 = none)'),
               'amplitude2': (0.0, 'rad/s', "the second tone's amplitude"),
               'freq3_hz': (0.0, 'Hz', 'a third, unrelated tone (0 = none)'),
@@ -76,6 +82,11 @@ class Vibration(Effect):
             raise InputError('vibration: freq_hz must be > 0')
         if self.spacing_hz < 0 or self.width_hz <= 0 or self.freq2_hz < 0 or self.freq3_hz < 0:
             raise InputError('vibration: spacing_hz, freq2_hz, freq3_hz >= 0 and width_hz > 0')
+        if self.wander_hz < 0 or self.wander_s <= 0:
+            raise InputError('vibration: wander_hz >= 0 and wander_s > 0')
+        if self.wander_hz > 0 and self.spacing_hz > 0:
+            raise InputError('vibration: wander_hz applies to one tone, not to a comb '
+                             '(spacing_hz > 0)')
 
     def lines(self, f_max: float = np.inf) -> list:
         """Return this vibration's (frequency, amplitude) lines below ``f_max``."""
@@ -85,12 +96,26 @@ class Vibration(Effect):
         lines = self.lines()
         phases = self.rng(ctx).uniform(0.0, 2.0 * np.pi, len(lines))
         tone = np.zeros(ctx.t.size)
-        for (f, a), phase in zip(lines, phases):
+        for k, ((f, a), phase) in enumerate(zip(lines, phases)):
+            if k == 0 and self.wander_hz > 0:
+                phase = phase + self._wander_phase(ctx)
             tone += a * np.sin(2.0 * np.pi * f * ctx.t + phase)
         gyro = gyro.copy()
         for r in axis_rows(self):
             gyro[r] += tone
         return gyro, accel
+
+    def _wander_phase(self, ctx) -> np.ndarray:
+        """Phase added by the frequency's Gauss-Markov wander (stationary from the start)."""
+        dt = ctx.dt_internal
+        a = np.exp(-dt / self.wander_s)
+        rng = ctx.rng(f'effect:{self.name}:{self.index}:wander')
+        e = np.sqrt(1.0 - a * a) * rng.standard_normal(ctx.t.size)
+        u0 = rng.standard_normal()
+        u, _ = signal.lfilter([1.0], [1.0, -a], e, zi=[a * u0])
+        # The phase is the integral of the frequency (trapezoid between samples).
+        f = self.wander_hz * u
+        return 2.0 * np.pi * np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * dt)])
 
 
 def resonance_coefficients(freq_hz: float, q: float, dt: float):
