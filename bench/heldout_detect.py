@@ -131,3 +131,29 @@ def swing_scales(period_s: float, duration: float):
     n_arw = cfg.noise['gyro_x']['N']
     w = 2 * np.pi / period_s
     return n_arw, cfg.stand.amplitude, cfg.encoder, w, n_arw * np.sqrt(2 / duration)
+
+
+def self_check(shapes, detectability, bias: float, n: int = 720000) -> None:
+    """
+    Build a held-out set's 27 records as the harness does and time them.
+
+    White noise plus ``bias``, the shape, rounded to the LSB; prints each record's time,
+    finiteness and analytic z (``detectability``). Shared by the sets' ``self_check``.
+    """
+    import time
+    dt, n_arw, lsb = 0.01, 2.4 * np.pi / 180.0 / 60.0, 0.05 * np.pi / 180.0
+    sig = n_arw / np.sqrt(dt)
+    worst, finite = 0.0, True
+    for name, (fn, levels) in shapes(dt, sig, n_arw).items():
+        for level, p in zip(('weak', 'strong', 'edge'), levels):
+            rng = np.random.default_rng(7)
+            x = sig * rng.standard_normal(n) + bias
+            start = time.perf_counter()
+            y = fn(x, rng, **p)
+            took = time.perf_counter() - start
+            y = np.round(y / lsb) * lsb
+            ok = y.shape == (n,) and bool(np.all(np.isfinite(y)))
+            worst, finite = max(worst, took), finite and ok
+            z = detectability(name, p, dt, sig, n_arw, n)
+            print(f'{name:18s} {level:6s} {took:6.2f} s  finite {ok}  z {z:9.2f}')
+    print(f'slowest generator {worst:.2f} s; all finite: {finite}')

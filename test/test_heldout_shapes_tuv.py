@@ -1,0 +1,91 @@
+# Held-out sets T, U and V (bench/validate_diagnosis_heldout_{t,u,v}.py, static only): the
+# generators do what their docstrings claim, and the static harness reaches them by
+# --held-out t / u / v. THE GENERATORS only, never the diagnosis.
+import bench_script
+from heldout_common import DT, N_ARW, rng, SIG, STATIC_NAMES
+import numpy as np
+import pytest
+from scipy import signal
+
+SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuv'}
+SHAPES = {k: m.shapes(DT, SIG, N_ARW) for k, m in SETS.items()}
+
+
+def white(n, seed):
+    return SIG * rng(seed).standard_normal(n) + 0.003
+
+
+def kurtosis(y):
+    y = y - y.mean()
+    return float(np.mean(y ** 4) / np.mean(y ** 2) ** 2 - 3.0)
+
+
+@pytest.mark.parametrize('letter', sorted(SETS))
+def test_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite(letter):
+    module, shapes = SETS[letter], SHAPES[letter]
+    assert sorted(shapes) == sorted(STATIC_NAMES + ['stale_samples'])
+    for name, (fn, levels) in shapes.items():
+        weak, strong, edge = [module.detectability(name, p, DT, SIG, N_ARW) for p in levels]
+        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
+        for p in levels:
+            x = white(20000, 1)
+            y = fn(x.copy(), rng(1), **p)
+            assert y.shape == x.shape and np.all(np.isfinite(y)), name
+            assert not np.allclose(y, x, rtol=0, atol=1e-12), name
+            assert np.array_equal(fn(x.copy(), rng(1), **p), y), name        # reproducible
+
+
+@pytest.mark.parametrize('letter', sorted(SETS))
+def test_static_harness_takes_the_set_by_its_letter(monkeypatch, letter):
+    static = bench_script.load('validate_diagnosis')
+    seen = []
+    monkeypatch.setattr(static, 'cases', lambda *a, **k: seen.append(a[3]) or [])
+    static.main(['--held-out', letter])
+    assert sorted(seen[0]) == sorted(SHAPES[letter])
+
+
+def test_t_ring_buffer_replays_blocks_of_16_with_no_lag_1_repeat():
+    fn, levels = SHAPES['t']['stale_samples']
+    x = white(200000, 3)
+    y = fn(x.copy(), rng(3), **levels[1])
+    lag16 = np.mean(y[16:] == y[:-16])
+    assert np.mean(y[1:] == y[:-1]) == 0.0
+    assert lag16 == pytest.approx(levels[1]['eps'], rel=0.25)
+
+
+def test_u_swept_fan_is_a_flat_band_with_a_constant_envelope():
+    fn, levels = SHAPES['u']['vibration']
+    x = np.zeros(2 ** 18)
+    y = fn(x.copy(), rng(4), **levels[1])
+    f, p = signal.welch(y, fs=1.0 / DT, nperseg=8192)
+    band = f[p > 0.1 * p.max()]
+    assert band.min() > 19.5 and band.max() < 24.0 and band.max() - band.min() > 2.0
+    assert kurtosis(y) == pytest.approx(-1.5, abs=0.05)    # a sinusoid's, whatever its sweep
+
+
+def test_u_radio_holds_come_in_whole_packets_of_five():
+    fn, levels = SHAPES['u']['stale_samples']
+    x = white(200000, 5)
+    y = fn(x.copy(), rng(5), **levels[1])
+    held = np.concatenate([[False], y[1:] == y[:-1]])
+    edges = np.diff(np.concatenate([[0], held.astype(int), [0]]))
+    runs = np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)
+    assert runs.size > 50 and np.all(runs % 5 == 0)
+
+
+def test_v_rotors_make_six_lines_at_the_intermodulation_frequencies():
+    fn, levels = SHAPES['v']['vibration']
+    y = fn(np.zeros(2 ** 18), rng(6), **levels[1])
+    f, p = signal.welch(y, fs=1.0 / DT, nperseg=16384)
+    peaks, _ = signal.find_peaks(p, height=1e-4 * p.max())
+    found = np.sort(f[peaks])
+    f1, f2 = 23.1, 23.1 * 17.0 / 29.0
+    want = np.sort([f1, f2, 2 * f1, 2 * f2, f1 - f2, f1 + f2])
+    assert found.size == 6 and np.allclose(found, want, atol=0.02)
+
+
+def test_v_clock_repeats_a_share_m_over_pi():
+    fn, levels = SHAPES['v']['stale_samples']
+    x = white(720000, 7)
+    y = fn(x.copy(), rng(7), **levels[1])
+    assert np.mean(y[1:] == y[:-1]) == pytest.approx(levels[1]['m'] / np.pi, rel=0.1)
