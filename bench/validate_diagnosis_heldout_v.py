@@ -80,8 +80,8 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
   q0) / q0) (as sets P-U).
 Edges are set at z ~ 4; weak and strong are several to hundreds of times further in z.
 """
-import time
 
+import heldout_detect
 from heldout_detect import band_excess, gm_avar, psd_avar
 
 import numpy as np
@@ -409,23 +409,8 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
 
 
 def self_check(n: int = 720000) -> None:
-    """Build the 27 records as the harness does (white + bias, effect, LSB) and time them."""
-    dt, n_arw, lsb = 0.01, 2.4 * np.pi / 180.0 / 60.0, 0.05 * np.pi / 180.0
-    sig = n_arw / np.sqrt(dt)
-    worst, finite = 0.0, True
-    for name, (fn, levels) in shapes(dt, sig, n_arw).items():
-        for level, p in zip(('weak', 'strong', 'edge'), levels):
-            rng = np.random.default_rng(7)
-            x = sig * rng.standard_normal(n) + BIAS
-            start = time.perf_counter()
-            y = fn(x, rng, **p)
-            took = time.perf_counter() - start
-            y = np.round(y / lsb) * lsb
-            ok = y.shape == (n,) and bool(np.all(np.isfinite(y)))
-            worst, finite = max(worst, took), finite and ok
-            z = detectability(name, p, dt, sig, n_arw, n)
-            print(f'{name:18s} {level:6s} {took:6.2f} s  finite {ok}  z {z:9.2f}')
-    print(f'slowest generator {worst:.2f} s; all finite: {finite}')
+    """Build the 27 records as the harness does and time them (``heldout_detect``)."""
+    heldout_detect.self_check(shapes, detectability, BIAS, n)
 
 
 if __name__ == '__main__':
