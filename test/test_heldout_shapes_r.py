@@ -1,8 +1,8 @@
 # Held-out set R (bench/validate_diagnosis_heldout_r.py, static, and
 # bench/validate_diagnosis_swing_heldout_r.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out r. THE GENERATORS only, never the diagnosis.
-from heldout_common import (AMP, avar, check_harnesses, check_swing_set, DT, G0, load_set,
-                            N_ARW, noisy_run, rng, SIG, STATIC_NAMES, swing, W)
+from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
+                            G0, load_set, N_ARW, noisy_run, rng, SIG, STATIC_NAMES, swing, W)
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -20,16 +20,7 @@ def white(n, seed):
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    assert sorted(SHAPES) == sorted(STATIC_NAMES + ['stale_samples'])
-    for name, (fn, levels) in SHAPES.items():
-        weak, strong, edge = [STATIC.detectability(name, p, DT, SIG, N_ARW) for p in levels]
-        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
-        for p in levels:
-            x = white(20000, 1)
-            y = fn(x.copy(), rng(1), **p)
-            assert y.shape == x.shape and np.all(np.isfinite(y)), name
-            assert not np.allclose(y, x, rtol=0, atol=1e-12), name
-            assert np.array_equal(fn(x.copy(), rng(1), **p), y), name        # reproducible
+    check_static_set(STATIC, SHAPES, STATIC_NAMES + ['stale_samples'], reproducible=True)
 
 
 def test_zero_levels_leave_the_record_unchanged():

@@ -2,7 +2,7 @@
 # generators do what their docstrings claim, and the static harness reaches them by
 # --held-out s. THE GENERATORS only, never the diagnosis.
 import bench_script
-from heldout_common import avar, DT, N_ARW, rng, SIG, STATIC_NAMES
+from heldout_common import avar, check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -22,16 +22,7 @@ def white(n, seed):
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    assert sorted(SHAPES) == sorted(STATIC_NAMES + ['stale_samples'])
-    for name, (fn, levels) in SHAPES.items():
-        weak, strong, edge = [STATIC.detectability(name, p, DT, SIG, N_ARW) for p in levels]
-        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
-        for p in levels:
-            x = white(20000, 1)
-            y = fn(x.copy(), rng(1), **p)
-            assert y.shape == x.shape and np.all(np.isfinite(y)), name
-            assert not np.allclose(y, x, rtol=0, atol=1e-12), name
-            assert np.array_equal(fn(x.copy(), rng(1), **p), y), name        # reproducible
+    check_static_set(STATIC, SHAPES, STATIC_NAMES + ['stale_samples'], reproducible=True)
 
 
 def test_zero_levels_leave_the_record_unchanged():

@@ -2,7 +2,7 @@
 # generators do what their docstrings claim, and the static harness reaches them by
 # --held-out t / u / v. THE GENERATORS only, never the diagnosis.
 import bench_script
-from heldout_common import DT, N_ARW, rng, SIG, STATIC_NAMES
+from heldout_common import check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES
 import numpy as np
 import pytest
 from scipy import signal
@@ -22,17 +22,8 @@ def kurtosis(y):
 
 @pytest.mark.parametrize('letter', sorted(SETS))
 def test_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite(letter):
-    module, shapes = SETS[letter], SHAPES[letter]
-    assert sorted(shapes) == sorted(STATIC_NAMES + ['stale_samples'])
-    for name, (fn, levels) in shapes.items():
-        weak, strong, edge = [module.detectability(name, p, DT, SIG, N_ARW) for p in levels]
-        assert 3.5 <= edge <= 4.5 and 2.5 * edge < weak < strong, (name, edge, weak, strong)
-        for p in levels:
-            x = white(20000, 1)
-            y = fn(x.copy(), rng(1), **p)
-            assert y.shape == x.shape and np.all(np.isfinite(y)), name
-            assert not np.allclose(y, x, rtol=0, atol=1e-12), name
-            assert np.array_equal(fn(x.copy(), rng(1), **p), y), name        # reproducible
+    check_static_set(SETS[letter], SHAPES[letter], STATIC_NAMES + ['stale_samples'],
+                     reproducible=True)
 
 
 @pytest.mark.parametrize('letter', sorted(SETS))
