@@ -70,6 +70,11 @@ def rng(seed):
     return np.random.default_rng(seed)
 
 
+def white(n, seed):
+    """White rate noise of the harness's level plus a small bias (a static record)."""
+    return SIG * rng(seed).standard_normal(n) + 0.003
+
+
 def noisy_run(seed=13):
     """Return (t, gyro): a 900 s, 1 kHz swing's true rate plus the preset gyro's white noise."""
     t = np.arange(900000) * 1e-3

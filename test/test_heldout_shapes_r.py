@@ -2,7 +2,8 @@
 # bench/validate_diagnosis_swing_heldout_r.py, swing): the generators do what their docstrings
 # claim, and both harnesses reach them by --held-out r. THE GENERATORS only, never the diagnosis.
 from heldout_common import (AMP, avar, check_harnesses, check_static_set, check_swing_set, DT,
-                            G0, load_set, N_ARW, noisy_run, rng, SIG, STATIC_NAMES, swing, W)
+                            G0, load_set, N_ARW, noisy_run, rng, SIG, STATIC_NAMES, swing, W,
+                            white)
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -13,10 +14,6 @@ STATIC, SWING, SHAPES, SWING_SHAPES = load_set('r')
 def acf(y, lags):
     y = y - y.mean()
     return np.array([np.mean(y[:-k] * y[k:]) for k in lags]) / np.mean(y * y)
-
-
-def white(n, seed):
-    return SIG * rng(seed).standard_normal(n) + 0.003
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

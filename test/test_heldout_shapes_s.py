@@ -2,7 +2,7 @@
 # generators do what their docstrings claim, and the static harness reaches them by
 # --held-out s. THE GENERATORS only, never the diagnosis.
 import bench_script
-from heldout_common import avar, check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES
+from heldout_common import avar, check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES, white
 import numpy as np
 import pytest
 from scipy import signal, stats
@@ -15,10 +15,6 @@ N2H = 720000                                        # samples in the harness's 2
 def acf(y, lags):
     y = y - y.mean()
     return np.array([np.mean(y[:-k] * y[k:]) for k in lags]) / np.mean(y * y)
-
-
-def white(n, seed):
-    return SIG * rng(seed).standard_normal(n) + 0.003
 
 
 def test_static_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():

@@ -2,17 +2,13 @@
 # generators do what their docstrings claim, and the static harness reaches them by
 # --held-out t / u / v. THE GENERATORS only, never the diagnosis.
 import bench_script
-from heldout_common import check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES
+from heldout_common import check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES, white
 import numpy as np
 import pytest
 from scipy import signal
 
 SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuv'}
 SHAPES = {k: m.shapes(DT, SIG, N_ARW) for k, m in SETS.items()}
-
-
-def white(n, seed):
-    return SIG * rng(seed).standard_normal(n) + 0.003
 
 
 def kurtosis(y):

@@ -81,15 +81,15 @@ def record_kurtosis(x: np.ndarray, dt: float, ranges: np.ndarray) -> np.ndarray:
 
 def _band_models(spec, ranges) -> list:
     """
-    Per band: the Gaussian part's PSD across it, its power, the lines inside, and more.
+    Per band: the Gaussian part (PSD, power), the lines, the wandering tones.
 
-    The more: the wandering tones' (``spec.envelopes``) power in the band, their fourth
-    cumulant there and its spread.
+    The wandering tones (``spec.envelopes``): their power in the band, their fourth cumulant
+    there and its spread.
     """
     ranges = np.asarray(ranges, dtype=float)
     u = (np.arange(POINTS) + 0.5) / POINTS
     f = ranges[:, :1] + u * (ranges[:, 1:] - ranges[:, :1])
-    envelopes = getattr(spec, 'envelopes', [])
+    envelopes = spec.envelopes
     parts = None
     if envelopes:
         skip = {e[4] for e in envelopes}
@@ -189,14 +189,14 @@ def expected_kurtosis(spec, n: int, dt: float, ranges: Sequence,
     return (mean, sd) if spread else mean
 
 
-def steady_envelope(x: np.ndarray, dt: float, f0: float, spec) -> bool:
+def steady_envelope(y: np.ndarray, dt: float, f0: float, spec) -> bool:
     """
     Whether the record's band holding ``f0`` Hz has a steadier envelope than ``spec`` makes.
 
-    Its excess kurtosis below the model's (the baseline's: Gaussian) by REPORT_Z standard
-    deviations and REPORT_EXCESS: a line or a wandering tone, not noise.
+    ``y``: the detrended record (``observables.detrend``). Its excess kurtosis below the
+    model's (the baseline's: Gaussian) by REPORT_Z standard deviations and REPORT_EXCESS: a
+    line or a wandering tone, not noise.
     """
-    y = obs.detrend(np.asarray(x, dtype=np.float64))
     ranges = band_ranges(y.size, dt)
     inside = np.flatnonzero((ranges[:, 0] <= f0) & (f0 < ranges[:, 1]))
     if not inside.size:

@@ -26,7 +26,7 @@ from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
-from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines
+from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines, WANDER_S
 import numpy as np
 
 # Effects whose static output has a closed form here.
@@ -308,7 +308,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
             if p.get('wander_hz', 0.0) > 0.0 and not p.get('spacing_hz', 0.0) > 0.0:
                 (f0, a), lines = lines[0], lines[1:]
                 _add_wandering_tone(spec, 0.5 * a * a, f0, p['wander_hz'],
-                                    p.get('wander_s', 10.0))
+                                    p.get('wander_s', WANDER_S))
                 if not lines:
                     continue
             fa = fold(np.array([f for f, _ in lines]), 1.0 / dt_i)

@@ -192,12 +192,12 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
     df = 1.0 / (obs.welch_segment(n) * dt)
     lines, levels = obs.narrow_lines(x, dt, psd=psd)
+    y = obs.detrend(x)
     # A wandering tone only where the peak's band has a steadier envelope than noise: the
     # form can mimic a mode's band, which only the fourth moment tells apart.
     wander = bool(tones.size) and steady_envelope(
-        x, dt, f_tone, model_spectrum(base.N, base.lsb, dt, []))
+        y, dt, f_tone, model_spectrum(base.N, base.lsb, dt, []))
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
-    y = obs.detrend(x)
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
     # A transient that started mid-record: from the record's change point (the extremum of
     # the detrended cumulative sum), with the sign of the mean before it against after it

@@ -64,10 +64,16 @@ def spread_hz(wander_hz: float, wander_s: float) -> float:
     return float(max(min(wander_hz, beta / (2.0 * np.pi * wander_s)), 1e-6))
 
 
+@lru_cache(maxsize=64)
+def _envelope_cumulative(wander_hz: float, wander_s: float) -> Tuple[np.ndarray, np.ndarray]:
+    """Return (nu, C): C(nu) the integral of E from 0 to nu (trapezoid on E's grid)."""
+    nu, e = envelope_spectrum(wander_hz, wander_s)
+    return nu, np.concatenate([[0.0], np.cumsum(0.5 * (e[1:] + e[:-1]) * np.diff(nu))])
+
+
 def band_share(lo: float, hi: float, f0: float, wander_hz: float, wander_s: float) -> float:
     """Return the share of the tone's power in [lo, hi] Hz (one-sided, both images of E)."""
-    nu, e = envelope_spectrum(float(wander_hz), float(wander_s))
-    c = np.concatenate([[0.0], np.cumsum(0.5 * (e[1:] + e[:-1]) * np.diff(nu))])
+    nu, c = _envelope_cumulative(float(wander_hz), float(wander_s))
 
     def cum(x):                      # integral of E from 0 to x (E even)
         return float(np.sign(x) * np.interp(abs(x), nu, c))

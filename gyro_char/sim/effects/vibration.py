@@ -14,6 +14,8 @@ from scipy import signal
 # Comb lines kept: down to this share of the centre line's power, at most this many a side.
 COMB_FLOOR = 1e-3
 COMB_SIDE = 200
+# Correlation time (s) of a tone's frequency wander where none is given.
+WANDER_S = 10.0
 
 
 def vibration_lines(params: dict, f_max: float = np.inf) -> list:
@@ -69,7 +71,7 @@ class Vibration(Effect):
               'spacing_hz': (0.0, 'Hz', 'comb line spacing; 0 = one tone'),
               'width_hz': (1.0, 'Hz', "half width of the comb's Lorentzian power envelope"),
               'wander_hz': (0.0, 'Hz', "rms wander of the tone's frequency (0 = held)"),
-              'wander_s': (10.0, 's', "correlation time of the frequency's wander"),
+              'wander_s': (WANDER_S, 's', "correlation time of the frequency's wander"),
               'freq2_hz': (0.0, 'Hz', 'a second, unrelated tone (0 = none)'),
               'amplitude2': (0.0, 'rad/s', "the second tone's amplitude"),
               'freq3_hz': (0.0, 'Hz', 'a third, unrelated tone (0 = none)'),
