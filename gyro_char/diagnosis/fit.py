@@ -50,6 +50,10 @@ class Param:
     # error's correlation time at 0.05 interval: white) starts there, so the main parameter
     # is fitted as without it; one whose bound is not (a gyro lag) uses ``off_at``.
     init: Optional[float] = None
+    # A digital filter's corner below this Nyquist frequency (Hz): searched on the prewarped
+    # tangent, log tan(pi v / (2 nyquist)), where its response changes evenly (near Nyquist a
+    # tenth of a hertz matters as much as an octave lower down).
+    nyquist: float = 0.0
 
     def is_off(self, value: float) -> bool:
         """Return True if ``value`` is this parameter's "absent" value (``off_at``)."""
@@ -114,6 +118,8 @@ def _to_u(p: Param, v: float) -> float:
     if p.is_off(v):
         v = p.hi if p.off_at == 'hi' else p.lo
     v = abs(v)
+    if p.nyquist:
+        return float(np.log(np.tan(0.5 * np.pi * v / p.nyquist)))
     return float(np.log(v)) if p.log else float(v)
 
 
@@ -130,7 +136,10 @@ def _from_u(p: Param, u: float) -> float:
     if (p.off_at == 'hi' and u >= _to_u(p, p.hi) - 1e-12
             or p.off_at == 'lo' and u <= _to_u(p, p.lo) + 1e-12):
         return 0.0
-    v = float(np.exp(u)) if p.log else float(u)
+    if p.nyquist:
+        v = float(2.0 * p.nyquist / np.pi * np.arctan(np.exp(u)))
+    else:
+        v = float(np.exp(u)) if p.log else float(u)
     return p.sign * (float(np.round(v)) if p.integer else v)
 
 

@@ -7,9 +7,10 @@ output rounding: white rate noise and the noise effects are generated at the int
 ``D``, then get the angle quantization (``quantization``) and the output step ``lsb``. Each
 stage has an exact discrete-time PSD, so the twin's output PSD is
 
-    S_out(f) = sum_r |H(f + r fs)|^2 S_int(f + r fs) + S_q(f) + S_lsb(f),   r = 0..D-1
+    S_out(f) = |G(f)|^2 sum_r |H(f + r fs)|^2 S_int(f + r fs) + S_q(f) + S_lsb(f),   r = 0..D-1
 
-(decimation folds the D images of the internal band; two-sided, per Hz). Tones are lines,
+(decimation folds the D images of the internal band; two-sided, per Hz; G is the sensor's
+output-rate low-pass, if any, whose delay of a slow warm-up is neglected). Tones are lines,
 folded the same way, but a tone whose frequency wanders is a noise part (``wander``); a
 warm-up is a deterministic mean term. Stale samples (an output sample repeating the previous
 one) act last, on the whole output (``holds.Holds``). ``ModelSpectrum`` holds the result
@@ -26,6 +27,7 @@ from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
+from gyro_char.sim.effects.sensor import output_lowpass_gain2
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines, WANDER_S
 import numpy as np
 
@@ -132,6 +134,9 @@ class ModelSpectrum:
     # noise's spectrum; ``band_kurtosis``): (f_out, mean square, wander_hz, wander_s, index
     # in ``internal``).
     envelopes: List[tuple] = field(default_factory=list)
+    # The output-rate filters (``internal_lowpass`` corner_hz, order): 0 for none.
+    corner_hz: float = 0.0
+    order: int = 0
     _hold_terms: dict = field(default_factory=dict, repr=False)
 
     def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
@@ -164,6 +169,12 @@ class ModelSpectrum:
         for _ in range(self.stages - 1):
             out = out * ratio
         return out
+
+    def g2(self, f) -> np.ndarray:
+        """|G(f)|^2 of the output-rate low-pass at output frequencies ``f`` (1 without one)."""
+        if not self.corner_hz:
+            return np.ones(np.shape(f))
+        return output_lowpass_gain2(f, self.corner_hz, self.order, self.dt)
 
     def images(self, f: np.ndarray) -> list:
         """
@@ -226,6 +237,8 @@ class ModelSpectrum:
             for i in sel:
                 s += self.internal[i](s2)
             total += h2 * s
+        if self.corner_hz:
+            total *= self.g2(f)
         s_sin = np.sin(np.pi * f * self.dt)
         total += self.output_white + self.angle_var * 4.0 * s_sin * s_sin / self.dt
         return 2.0 * total
@@ -265,7 +278,8 @@ def _add_wandering_tone(spec: ModelSpectrum, power: float, f0: float, wander_hz:
     spec.internal.append(psd)
     f_out = float(fold(f_i, 1.0 / spec.dt))
     spec.peaks.append((f_out, wander.spread_hz(wander_hz, wander_s)))
-    spec.envelopes.append((f_out, power * float(spec.h2(np.array([f_i]))[0]), wander_hz,
+    spec.envelopes.append((f_out, power * float(spec.h2(np.array([f_i]))[0] * spec.g2(f_out)),
+                           wander_hz,
                            wander_s, len(spec.internal) - 1))
 
 
@@ -277,11 +291,12 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
     the filter's and the holds' long-tau gains so that the output keeps N). Raises ValueError
     for an effect without a closed form (a motion or encoder effect).
     """
-    decim, taps, stages, holds = 1, 1, 1, None
+    decim, taps, stages, holds, corner, order = 1, 1, 1, None, 0.0, 0
     for name, p in effects:
         if name == 'internal_lowpass':
             decim = max(decim, int(p.get('decimation', 1.0)))
             taps, stages = int(p['taps']), int(p.get('stages', 2.0))
+            corner, order = p.get('corner_hz', 0.0), int(p.get('order', 2.0))
         elif name == 'stale_samples':
             holds = Holds.from_params(p)
     h = moving_average_kernel(taps, stages)
@@ -291,7 +306,8 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
     dt_i = dt / decim
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,
                          white_int=(n_white / gain) ** 2,
-                         output_white=lsb * lsb / 12.0 * dt)
+                         output_white=lsb * lsb / 12.0 * dt, corner_hz=corner,
+                         order=order if corner else 0)
     for name, p in effects:
         if name not in CLOSED_FORM:
             raise ValueError(f'effect {name} has no closed-form static spectrum')
@@ -312,8 +328,9 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
                 if not lines:
                     continue
             fa = fold(np.array([f for f, _ in lines]), 1.0 / dt_i)
-            power = 0.5 * np.array([a for _, a in lines]) ** 2 * spec.h2(fa)
-            spec.lines.extend(zip(fold(fa, 1.0 / dt).tolist(), power.tolist()))
+            f_out = fold(fa, 1.0 / dt)
+            power = 0.5 * np.array([a for _, a in lines]) ** 2 * spec.h2(fa) * spec.g2(f_out)
+            spec.lines.extend(zip(f_out.tolist(), power.tolist()))
         elif name == 'temperature_drift':
             for c, lag in transient_terms(p['amplitude'], p['tau_s'], p.get('rise_s', 0.0)):
                 spec.warmups.append((c, lag, p.get('t0_s', 0.0)))

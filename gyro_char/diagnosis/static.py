@@ -45,6 +45,9 @@ RUN_MAX = 2000.0
 # exact repeats is measured, the held share is searched within this factor of it (or within
 # REPEAT_Z standard errors, whichever is wider).
 SHARE_SLACK = 1.5
+# The output-rate low-pass's corner, in cycles per sample: from 2 % of the rate (below, it is
+# a strong smoother the averages or a Gauss-Markov process describe) to just under Nyquist.
+DLPF_LO, DLPF_HI = 0.02, 0.4995
 
 
 @dataclass
@@ -230,10 +233,15 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     gm_start = markov_start(y, dt, base.N, *gm_tau, *gm_sigma)
     spaces = {
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
-        # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline.
+        # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline. Or the
+        # output-rate Butterworth low-pass (a DLPF) of order 1 or 2: the averages, decimated,
+        # make whole steps of correlation, a gentle roll-off below Nyquist is the DLPF's.
         'internal_lowpass': EffectSpace('internal_lowpass', [
             Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
-            fixed={'decimation': 8.0}),
+            fixed={'decimation': 8.0}, alternatives=(EffectSpace('internal_lowpass', [
+                Param('corner_hz', DLPF_LO / dt, DLPF_HI / dt, nyquist=0.5 / dt),
+                Param('order', 1, 2, integer=True, choice=True)],
+                fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),)),
         # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
         # output Nyquist frequency, means no corner): B first without a corner, then the
         # corner, then both again (a corner moves the best B; refits near it: one pass). The

@@ -229,7 +229,7 @@ def _imu_chain(cfg: BenchConfig, ctx: SimContext, fx: Sequence[Effect], n: int,
         gyro, accel = effect.internal(ctx, gyro, accel)
     if d > 1:
         gyro, accel = gyro[:, d - 1::d], accel[:, d - 1::d]
-    for effect in fx:
+    for effect in sorted(fx, key=lambda e: e.output_stage):
         gyro, accel = effect.output(ctx, gyro, accel)
     gyro = quantize(gyro, g.output_step, g.quantizer)
     accel = quantize(accel, cfg.accel.output_step, 'round')

@@ -20,7 +20,9 @@ The chain, per run (``ctx`` is a ``SimContext``; gyro/accel arrays are 3 x n, ro
    internal rate (e.g. ``internal_lowpass``); same length in and out. The simulator then
    decimates to the output rate by keeping every D-th sample.
 5. ``output(ctx, gyro, accel) -> (gyro, accel)``: at the output rate, before the baseline output
-   quantization dH (``ctx.t_out`` holds the true output sample instants).
+   quantization dH (``ctx.t_out`` holds the true output sample instants). Effects run here in
+   the order of their ``output_stage`` (the sensor's own output filter, 0, before the
+   output-stage errors, 1), the user's order within a stage.
 6. ``stamps(ctx, t) -> t``: IMU header stamps from the true output sample instants.
 7. ``encoder_angle(ctx, t, angle) -> angle``: the encoder's reading of the true stand angle at
    its sample instants, before its level/word quantization (swing runs only).
@@ -83,6 +85,7 @@ class Effect:
     summary = ''
     physics = ''
     PARAMS: Dict[str, Tuple[float, str, str]] = {}
+    output_stage = 1                # order of the ``output`` hooks (0: the sensor's own filter)
 
     def __init__(self, index: int = 0, **params: float) -> None:
         unknown = set(params) - set(self.PARAMS)

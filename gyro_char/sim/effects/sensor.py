@@ -25,9 +25,21 @@ def _add_truth_term(truth, rows, term, value):
             ch[term] = float(np.hypot(ch[term], value))
 
 
+def output_lowpass(corner_hz: float, order: int, dt: float) -> tuple:
+    """(b, a) of the output-rate Butterworth low-pass (bilinear, corner ``corner_hz``)."""
+    return signal.butter(int(order), corner_hz, fs=1.0 / dt)
+
+
+def output_lowpass_gain2(f, corner_hz: float, order: int, dt: float) -> np.ndarray:
+    """|G(f)|^2 of ``output_lowpass``: 1 / (1 + (tan(pi f dt) / tan(pi fc dt))^(2 order))."""
+    f = np.abs(np.asarray(f, dtype=np.float64))
+    ratio = np.tan(np.pi * np.minimum(f * dt, 0.5 - 1e-12)) / np.tan(np.pi * corner_hz * dt)
+    return 1.0 / (1.0 + ratio ** (2 * int(order)))
+
+
 @register
 class InternalLowpass(Effect):
-    """The ADIS16405's Bartlett-window averaging at its internal rate, then decimation."""
+    """The sensor's own digital smoothing: averaging at the internal rate, an output low-pass."""
 
     name = 'internal_lowpass'
     summary = 'sensor-internal FIR smoothing and decimation (correlated output samples)'
@@ -38,16 +50,32 @@ class InternalLowpass(Effect):
                '(delay (N-1) internal samples), every decimation-th sample is output. White '
                'noise at the output then has lag-k autocorrelation sum_j h_j h_(j+kD) / '
                'sum h^2, a short-tau Allan curve below the N line, and the long-tau N kept '
-               'at N sqrt(D sum_r H_r^2) (H_r: polyphase sums of h).')
+               'at N sqrt(D sum_r H_r^2) (H_r: polyphase sums of h). corner_hz > 0 adds '
+               'the digital low-pass most MEMS IMUs apply at the output data rate (a '
+               'programmable DLPF): a Butterworth of the given order, mapped bilinearly, so '
+               'its response falls to zero at the output Nyquist frequency; its DC gain is '
+               '1, so N is unchanged. It acts on the decimated output before any '
+               'output-stage error (angle quantization, stale samples).')
     PARAMS = {'taps': (4.0, 'samples', 'moving-average length N at the internal rate'),
               'stages': (2.0, '-', 'cascaded averages (2: Bartlett triangle, 1: boxcar)'),
               'decimation': (1.0, '-', 'internal samples per output sample'),
-              'accel': (1.0, '-', '1: accelerometers are filtered too')}
+              'accel': (1.0, '-', '1: accelerometers are filtered too'),
+              'corner_hz': (0.0, 'Hz', 'output-rate low-pass corner (0: none)'),
+              'order': (2.0, '-', 'its Butterworth order (1 or 2)')}
+    output_stage = 0
 
     def check(self):
         for key in ('taps', 'stages', 'decimation'):
             if self.params[key] < 1 or self.params[key] != int(self.params[key]):
                 raise InputError(f'internal_lowpass: {key} must be a whole number >= 1')
+        if self.corner_hz < 0.0 or self.order not in (1.0, 2.0):
+            raise InputError('internal_lowpass: corner_hz must be >= 0 and order 1 or 2')
+
+    def describe(self):
+        out = describe_without(self, 'corner_hz')
+        if 'corner_hz' not in out['params']:
+            del out['params']['order']
+        return out
 
     def kernel(self) -> np.ndarray:
         return bartlett_kernel(int(self.taps), int(self.stages))
@@ -61,6 +89,19 @@ class InternalLowpass(Effect):
         if self.accel:
             accel = self._filter(h, accel)
         return gyro, accel
+
+    def output(self, ctx, gyro, accel):
+        if not self.corner_hz:
+            return gyro, accel
+        if self.corner_hz >= 0.5 / ctx.dt:
+            raise InputError(f'internal_lowpass: corner_hz {self.corner_hz:g} must be below '
+                             f'the output Nyquist frequency {0.5 / ctx.dt:g} Hz')
+        b, a = output_lowpass(self.corner_hz, int(self.order), ctx.dt)
+
+        def run(x):   # started in steady state on the first sample, like the averages
+            zi = signal.lfilter_zi(b, a)[None, :] * x[:, :1]
+            return signal.lfilter(b, a, x, axis=1, zi=zi)[0]
+        return run(gyro), (run(accel) if self.accel else accel)
 
     @staticmethod
     def _filter(h, x):
