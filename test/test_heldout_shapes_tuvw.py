@@ -1,13 +1,13 @@
-# Held-out sets T, U and V (bench/validate_diagnosis_heldout_{t,u,v}.py, static only): the
-# generators do what their docstrings claim, and the static harness reaches them by
-# --held-out t / u / v. THE GENERATORS only, never the diagnosis.
+# Held-out sets T, U, V and W (bench/validate_diagnosis_heldout_{t,u,v,w}.py, static only):
+# the generators do what their docstrings claim, and the static harness reaches them by
+# --held-out t / u / v / w. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES, white
 import numpy as np
 import pytest
 from scipy import signal
 
-SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuv'}
+SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuvw'}
 SHAPES = {k: m.shapes(DT, SIG, N_ARW) for k, m in SETS.items()}
 
 
