@@ -10,6 +10,7 @@ from typing import List, Optional, Sequence
 
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.sim.effects.vibration import TONES
 import numpy as np
 
 
@@ -90,8 +91,8 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
     start. Where three or more sit on one lattice (``observables.comb_of``), a comb about the
     strongest is an alternative start: lines at centre + k spacing under a Lorentzian
     envelope whose width is fitted (a tone is its narrow limit). Where two or more lines
-    show, the three strongest as unrelated tones are another, each amplitude fitted within a
-    factor 2 of its line's measured amplitude (``levels``; a search from one tone at a time
+    show, the ``TONES`` strongest as unrelated tones are another, each amplitude fitted within
+    a factor 2 of its line's measured amplitude (``levels``; a search from one tone at a time
     crawls along the valley where their total power is right). Line frequencies and the
     spacing, measured on the lines' peaks, are kept (``estimated``): the observables hardly
     see a change within a bin, so a search would only trade them for noise.
@@ -118,8 +119,9 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
             Param('width_hz', 0.25 * spacing, 1.0 / dt)], fixed={'spacing_hz': spacing},
             estimated=('spacing_hz',), passes=2))
     if lines.size >= 2:
-        tones = lines[:3]
-        names = [('freq_hz', 'amplitude'), ('freq2_hz', 'amplitude2'), ('freq3_hz', 'amplitude3')]
+        tones = lines[:TONES]
+        names = [('freq_hz', 'amplitude')] + [(f'freq{j}_hz', f'amplitude{j}')
+                                              for j in range(2, TONES + 1)]
         lo, hi = 0.01 * sig_sample, 2.0 * sig_sample
         start = np.clip(levels[:tones.size], lo, hi)
         others.append(EffectSpace('vibration', [

@@ -16,6 +16,9 @@ COMB_FLOOR = 1e-3
 COMB_SIDE = 200
 # Correlation time (s) of a tone's frequency wander where none is given.
 WANDER_S = 10.0
+# Tones in all: freq_hz and the unrelated freq2_hz ... freq<TONES>_hz (other machines, a
+# belt's second shaft, the sum and difference lines a nonlinear mount makes of two shafts).
+TONES = 6
 
 
 def vibration_lines(params: dict, f_max: float = np.inf) -> list:
@@ -27,8 +30,8 @@ def vibration_lines(params: dict, f_max: float = np.inf) -> list:
     Lorentzian of half width ``width_hz`` about the centre line: what a periodic,
     non-sinusoidal disturbance makes (a knock or kick every 1 / spacing_hz seconds, a gear mesh
     with shaft run-out sidebands, a frequency-modulated drive), the envelope being the response
-    that shapes each event. Plus the unrelated tones ``freq2_hz`` and ``freq3_hz`` (a second
-    and third machine), where their amplitudes are not 0.
+    that shapes each event. Plus the unrelated tones ``freq2_hz`` ... (``TONES`` in all: other
+    machines, intermodulation lines), where their amplitudes are not 0.
     """
     freq, amplitude = params['freq_hz'], params['amplitude']
     spacing, width = params.get('spacing_hz', 0.0), params.get('width_hz', 1.0)
@@ -41,7 +44,7 @@ def vibration_lines(params: dict, f_max: float = np.inf) -> list:
         a = amplitude / np.sqrt(1.0 + (k * spacing / width) ** 2)
         keep = (f > 0.0) & (f < f_max)
         lines = list(zip(f[keep].tolist(), a[keep].tolist()))
-    for j in (2, 3):
+    for j in range(2, TONES + 1):
         f, a = params.get(f'freq{j}_hz', 0.0), params.get(f'amplitude{j}', 0.0)
         if f > 0.0 and a != 0.0 and f < f_max:
             lines.append((f, a))
@@ -61,7 +64,8 @@ class Vibration(Effect):
                '> 0, a periodic non-sinusoidal disturbance: lines at freq_hz + k spacing_hz, '
                'each of its own random phase, power amplitude^2 / 2 / (1 + (k spacing_hz / '
                'width_hz)^2) (knocks, kicks, gear-mesh sidebands, a frequency-modulated drive). '
-               'freq2_hz / freq3_hz: further tones of their own amplitudes (other machines). '
+               'freq2_hz ... freq6_hz: further tones of their own amplitudes (other machines, '
+               'intermodulation lines). '
                'wander_hz > 0 (one tone): a machine whose speed is not held, the frequency '
                'freq_hz + wander_hz u(t), u a unit Gauss-Markov process of correlation time '
                "wander_s: the power spreads over a band (the frequency's own law when slow, a "
@@ -72,18 +76,19 @@ class Vibration(Effect):
               'width_hz': (1.0, 'Hz', "half width of the comb's Lorentzian power envelope"),
               'wander_hz': (0.0, 'Hz', "rms wander of the tone's frequency (0 = held)"),
               'wander_s': (WANDER_S, 's', "correlation time of the frequency's wander"),
-              'freq2_hz': (0.0, 'Hz', 'a second, unrelated tone (0 = none)'),
-              'amplitude2': (0.0, 'rad/s', "the second tone's amplitude"),
-              'freq3_hz': (0.0, 'Hz', 'a third, unrelated tone (0 = none)'),
-              'amplitude3': (0.0, 'rad/s', "the third tone's amplitude"),
+              **{key: entry for j in range(2, TONES + 1) for key, entry in (
+                  (f'freq{j}_hz', (0.0, 'Hz', f'unrelated tone {j} (0 = none)')),
+                  (f'amplitude{j}', (0.0, 'rad/s', f'tone {j} amplitude')))},
               'axis': axis_param(2.0)}
 
     def check(self):
         axis_rows(self)
         if self.freq_hz <= 0:
             raise InputError('vibration: freq_hz must be > 0')
-        if self.spacing_hz < 0 or self.width_hz <= 0 or self.freq2_hz < 0 or self.freq3_hz < 0:
-            raise InputError('vibration: spacing_hz, freq2_hz, freq3_hz >= 0 and width_hz > 0')
+        if (self.spacing_hz < 0 or self.width_hz <= 0
+                or any(self.params[f'freq{j}_hz'] < 0 for j in range(2, TONES + 1))):
+            raise InputError('vibration: spacing_hz and the further tones freq2_hz ... >= 0, '
+                             'width_hz > 0')
         if self.wander_hz < 0 or self.wander_s <= 0:
             raise InputError('vibration: wander_hz >= 0 and wander_s > 0')
         if self.wander_hz > 0 and self.spacing_hz > 0:
