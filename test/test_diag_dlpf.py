@@ -1,8 +1,10 @@
 """The output-rate low-pass (``internal_lowpass:corner_hz,order``): simulator, closed form, fit."""
+from dataclasses import replace
+
 from gyro_char.diagnosis import expected, spread, static, static_expect
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import run
-from gyro_char.diagnosis.fit import _from_u, _to_u, Param
+from gyro_char.diagnosis.fit import EffectSpace, Evaluation, fit_effect, Param
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.errors import InputError
 from gyro_char.sim.effects import EFFECTS
@@ -62,11 +64,11 @@ def test_expected_observables_equal_the_twins_within_their_scatter(name):
 def test_the_corner_is_searched_on_the_prewarped_tangent():
     p = Param('corner_hz', 2.0, 49.95, nyquist=50.0)
     for v in (2.0, 30.0, 49.8, 49.95):
-        assert _from_u(p, _to_u(p, v)) == pytest.approx(v, rel=1e-12)
+        assert p.from_u(p.to_u(v)) == pytest.approx(v, rel=1e-12)
     # Equal steps in the search variable: 49.7 -> 49.85 Hz (the tangent doubles) is as far as
     # 25 -> 35.2 Hz, and as 4.5 -> 9 Hz.
     for lo, hi in ((49.7, 49.85), (25.0, 35.24), (4.5, 9.0)):
-        assert _to_u(p, hi) - _to_u(p, lo) == pytest.approx(np.log(2.0), rel=0.05)
+        assert p.to_u(hi) - p.to_u(lo) == pytest.approx(np.log(2.0), rel=0.05)
 
 
 def test_the_form_is_checked_and_left_out_of_truth_when_absent():
@@ -93,3 +95,30 @@ def test_a_dlpf_is_named_with_its_corner_where_the_averages_cannot_follow(corner
     warp = np.tan(np.pi * DT * np.array([fitted['corner_hz'], corner]))
     assert abs(np.log(warp[0] / warp[1])) < 0.3
     assert d.final_gap < d.null_gap['q95']
+
+
+class _Toy:
+    """A gap with two forms of one effect: form b is better only once 'other' is selected."""
+
+    def evaluate(self, effects):
+        other = any(n == 'other' for n, _ in effects)
+        p = dict(effects)['lp']
+        if 'corner_hz' in p:
+            gap = 5.0 + (p['corner_hz'] - 40.0) ** 2 / 100 - (4.0 if other else 0.0)
+        else:
+            gap = 3.0 + (p['taps'] - 8.0) ** 2 / 10
+        return Evaluation(effects=list(effects), gap=gap, stats=[])
+
+
+def test_a_refit_tries_the_forms_the_earlier_fit_did_not_take_where_asked():
+    taps = EffectSpace('lp', [Param('taps', 2, 32, integer=True)])
+    corner = EffectSpace('lp', [Param('corner_hz', 2.0, 49.9, nyquist=50.0)],
+                         fixed={'taps': 1.0})
+    for refit_all, form in ((False, 'taps'), (True, 'corner_hz')):
+        space = replace(taps, alternatives=(corner,), refit_all=refit_all)
+        first, ev = fit_effect(_Toy(), [], space)
+        assert 'corner_hz' not in first and ev.gap == pytest.approx(3.0)
+        # With 'other' selected the corner form is the better (gap ~1); a refit near the
+        # first fit finds it only if it also fits the form the first fit did not take.
+        again, ev = fit_effect(_Toy(), [('other', {})], space, near=first)
+        assert form in again

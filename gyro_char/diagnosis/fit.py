@@ -59,6 +59,26 @@ class Param:
         """Return True if ``value`` is this parameter's "absent" value (``off_at``)."""
         return bool(self.off_at) and value == 0.0
 
+    def to_u(self, v: float) -> float:
+        """Return the search variable of value ``v`` (log, linear or prewarped tangent)."""
+        if self.is_off(v):
+            v = self.hi if self.off_at == 'hi' else self.lo
+        v = abs(v)
+        if self.nyquist:
+            return float(np.log(np.tan(0.5 * np.pi * v / self.nyquist)))
+        return float(np.log(v)) if self.log else float(v)
+
+    def from_u(self, u: float) -> float:
+        """Return the value at search variable ``u`` (0 at an ``off_at`` bound, sign applied)."""
+        if (self.off_at == 'hi' and u >= self.to_u(self.hi) - 1e-12
+                or self.off_at == 'lo' and u <= self.to_u(self.lo) + 1e-12):
+            return 0.0
+        if self.nyquist:
+            v = float(2.0 * self.nyquist / np.pi * np.arctan(np.exp(u)))
+        else:
+            v = float(np.exp(u)) if self.log else float(u)
+        return self.sign * (float(np.round(v)) if self.integer else v)
+
 
 @dataclass
 class EffectSpace:
@@ -77,6 +97,11 @@ class EffectSpace:
     # Entries of ``fixed`` estimated from the record rather than known (a comb's spacing, from
     # its lines): not searched, but free parameters to a criterion that counts them.
     estimated: tuple = ()
+    # A refit near an earlier fit (a later greedy step, the joint refit) also fits the
+    # alternatives that fit did not take, over their whole spaces: forms of one effect that
+    # trade differently with the effects selected since (a filter's averages and its
+    # output low-pass beside a mode). Otherwise a refit keeps to the earlier fit's start.
+    refit_all: bool = False
 
 
 @dataclass
@@ -114,33 +139,13 @@ class GapObjective:
         self.reference = [s.std for s in baseline.stats]
 
 
-def _to_u(p: Param, v: float) -> float:
-    if p.is_off(v):
-        v = p.hi if p.off_at == 'hi' else p.lo
-    v = abs(v)
-    if p.nyquist:
-        return float(np.log(np.tan(0.5 * np.pi * v / p.nyquist)))
-    return float(np.log(v)) if p.log else float(v)
-
-
 def _start_value(p: Param) -> float:
     """Where the search of ``p`` starts: ``init``, 0 if it can be absent, else mid-range."""
     if p.init is not None:
         return p.init
     if p.off_at:
         return 0.0
-    return _from_u(p, 0.5 * (_to_u(p, p.lo) + _to_u(p, p.hi)))
-
-
-def _from_u(p: Param, u: float) -> float:
-    if (p.off_at == 'hi' and u >= _to_u(p, p.hi) - 1e-12
-            or p.off_at == 'lo' and u <= _to_u(p, p.lo) + 1e-12):
-        return 0.0
-    if p.nyquist:
-        v = float(2.0 * p.nyquist / np.pi * np.arctan(np.exp(u)))
-    else:
-        v = float(np.exp(u)) if p.log else float(u)
-    return p.sign * (float(np.round(v)) if p.integer else v)
+    return p.from_u(0.5 * (p.to_u(p.lo) + p.to_u(p.hi)))
 
 
 def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *,
@@ -160,11 +165,15 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
     """
     if space.alternatives:
         options = (replace(space, alternatives=()),) + tuple(space.alternatives)
+        starts = [near] * len(options)
         if near:   # a refit keeps to the start whose parameters the earlier fit has
-            options = tuple(sp for sp in options
-                            if {p.name for p in sp.params} | set(sp.fixed) == set(near)) or options
+            own = [{p.name for p in sp.params} | set(sp.fixed) == set(near) for sp in options]
+            if space.refit_all and any(own):
+                starts = [near if o else None for o in own]
+            elif any(own):
+                options = tuple(sp for sp, o in zip(options, own) if o)
         fits = [fit_effect(objective, selected, sp, grid=grid, refine=refine, passes=passes,
-                           near=near, at=at) for sp in options]
+                           near=start, at=at) for sp, start in zip(options, starts)]
         return min(fits, key=lambda f: f[1].gap)
     choices = [p for p in space.params if p.choice]
     if choices:
@@ -195,52 +204,52 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
         for p in space.params:
             if p.name in space.start and len(space.params) > 1 and passes == 1:
                 continue  # trusted data-driven value (e.g. tone frequency): spend on the rest
-            lo_u, hi_u = _to_u(p, p.lo), _to_u(p, p.hi)
+            lo_u, hi_u = p.to_u(p.lo), p.to_u(p.hi)
             if near and p.name in near:
                 cell = (hi_u - lo_u) / (grid - 1)
-                u0 = _to_u(p, values[p.name])
+                u0 = p.to_u(values[p.name])
                 us = np.clip(np.array([u0 - cell, u0, u0 + cell]), lo_u, hi_u)
             elif p.integer:
                 whole = np.unique(np.round(np.geomspace(p.lo, p.hi, grid + 2)))
-                us = np.array([_to_u(p, v) for v in whole])
+                us = np.array([p.to_u(v) for v in whole])
             else:
                 us = np.linspace(lo_u, hi_u, grid)
             # The current value is a candidate too: a step never ends worse than where it
             # started (a data-driven start between grid points, a good first coordinate).
-            u_now = _to_u(p, values[p.name])
+            u_now = p.to_u(values[p.name])
             if np.min(np.abs(us - u_now)) > 1e-9:
                 us = np.sort(np.r_[us, u_now])
             evals = []
             for u in us:
-                e = run({**values, p.name: _from_u(p, u)})
+                e = run({**values, p.name: p.from_u(u)})
                 evals.append(e)
             k = int(np.argmin([e.gap for e in evals]))
             cache = {}
 
             def f(u, p=p):
-                e = run({**values, p.name: _from_u(p, u)})
+                e = run({**values, p.name: p.from_u(u)})
                 cache[u] = e
                 return e.gap
 
             a, b = us[max(k - 1, 0)], us[min(k + 1, us.size - 1)]
             if p.integer:
                 # Every whole value between the best grid point's neighbours.
-                near_k = [v for v in range(int(round(abs(_from_u(p, a)))) + 1,
-                                           int(round(abs(_from_u(p, b)))))
-                          if v != int(round(abs(_from_u(p, us[k]))))]
+                near_k = [v for v in range(int(round(abs(p.from_u(a)))) + 1,
+                                           int(round(abs(p.from_u(b)))))
+                          if v != int(round(abs(p.from_u(us[k]))))]
                 u_best, e_best = us[k], evals[k]
                 for v in near_k:
                     e = run({**values, p.name: p.sign * float(v)})
                     if e.gap < e_best.gap:
-                        u_best, e_best = _to_u(p, float(v)), e
+                        u_best, e_best = p.to_u(float(v)), e
             elif refine > 0 and b > a:
                 res = optimize.minimize_scalar(f, bounds=(a, b), method='bounded',
                                                options={'maxiter': refine, 'xatol': 1e-3})
-                cand = cache.get(res.x) or run({**values, p.name: _from_u(p, res.x)})
+                cand = cache.get(res.x) or run({**values, p.name: p.from_u(res.x)})
                 u_best, e_best = (res.x, cand) if cand.gap < evals[k].gap else (us[k], evals[k])
             else:
                 u_best, e_best = us[k], evals[k]
-            values[p.name] = _from_u(p, u_best)
+            values[p.name] = p.from_u(u_best)
             best = e_best
     if best is None:  # every parameter was fixed by the data
         best = run(values)

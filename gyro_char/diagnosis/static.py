@@ -241,7 +241,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
             fixed={'decimation': 8.0}, alternatives=(EffectSpace('internal_lowpass', [
                 Param('corner_hz', DLPF_LO / dt, DLPF_HI / dt, nyquist=0.5 / dt),
                 Param('order', 1, 2, integer=True, choice=True)],
-                fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),)),
+                fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),), refit_all=True),
         # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
         # output Nyquist frequency, means no corner): B first without a corner, then the
         # corner, then both again (a corner moves the best B; refits near it: one pass). The
