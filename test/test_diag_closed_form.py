@@ -18,6 +18,8 @@ DT = 0.01
 LSB = 0.05 * np.pi / 180.0
 BASE = static.StaticBaseline(N=7e-4, bias=0.0, drift=0.0, lsb=LSB, dt=DT)
 LOWPASS = ('internal_lowpass', {'taps': 7.0, 'stages': 2.0, 'decimation': 8.0})
+DLPF = ('internal_lowpass', {'taps': 1.0, 'stages': 1.0, 'decimation': 1.0, 'corner_hz': 35.0,
+                             'order': 2.0})
 CASES = {
     'baseline': [],
     'internal_lowpass': [LOWPASS],
@@ -61,6 +63,13 @@ CASES = {
                            ('vibration', {'amplitude': 3e-3, 'freq_hz': 21.8}),
                            ('stale_samples', {'p': 0.15, 'run': 20.0})],
     'stale_samples_short_runs': [('stale_samples', {'p': 0.3, 'run': 3.0})],
+    # The output-rate low-pass (a DLPF): listed after the quantizer, it still filters first
+    # (``Effect.output_stage``); a line passes it.
+    'dlpf_2': [DLPF],
+    'dlpf_1_near_nyquist': [('internal_lowpass', {**DLPF[1], 'corner_hz': 49.8, 'order': 1.0})],
+    'dlpf_under_quantizer_and_tone': [('quantization', {'step_rad': 2e-4, 'dither': 1.0}),
+                                      ('vibration', {'amplitude': 3e-3, 'freq_hz': 41.3}),
+                                      DLPF],
 }
 
 
