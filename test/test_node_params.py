@@ -68,12 +68,18 @@ ACCEPTED = {  # an integer where a float is declared: (node, parameter, value gi
 }
 
 
-def _call(ex, node, srv_type, name, request):
+def _call(ex, node, srv_type, name, request, tries=3):
+    # The service shows before the DDS request/response pair is matched both ways: a request
+    # sent in that window is lost (seen once with three nodes starting on a loaded machine).
+    # A lost request is sent again; a node that never answers still fails the test.
     client = node.create_client(srv_type, name)
     assert client.wait_for_service(timeout_sec=20.0), name
-    future = client.call_async(request)
-    assert spin_until(ex, future.done, 10.0), name
-    return future.result()
+    for _ in range(tries):
+        future = client.call_async(request)
+        if spin_until(ex, future.done, 10.0):
+            return future.result()
+        client.remove_pending_request(future)
+    raise AssertionError(f'{name}: no answer to {tries} requests in 10 s each')
 
 
 def test_an_integer_is_taken_for_a_float():
