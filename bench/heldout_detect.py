@@ -3,7 +3,8 @@ Detectability arithmetic the held-out shape sets share (where their edge levels 
 
 The sets themselves were written blind, one author each; these are the pieces of their
 ``detectability`` that came out the same: the Allan variance of a one-sided PSD and of a
-first-order Gauss-Markov process and a band's mean excess over white (static), a matched
+first-order Gauss-Markov process, an Allan excess's z and a band's mean excess over white
+(static), a matched
 detector for a deterministic angle residual, the harmonic of a memoryless rate error and a
 rate error averaged over the gyro's own noise (swing).
 """
@@ -29,6 +30,24 @@ def psd_avar(psd, tau: np.ndarray, dt: float) -> np.ndarray:
         k = np.where(f * tt > 30, 3.0 / 8.0, np.sin(x) ** 4) / x ** 2
         out.append(2 * np.trapezoid(s * k, f))
     return np.array(out)
+
+
+ALLAN_POINTS = 60       # averaging times of the static sets' Allan statistic (B-D: 200)
+
+
+def allan_taus(dt: float, big_t: float, points: int = ALLAN_POINTS) -> np.ndarray:
+    """Averaging times of the static sets' Allan statistic: 10 dt to T / 10, log-spaced."""
+    return np.geomspace(10 * dt, big_t / 10, points)
+
+
+def allan_z(excess: np.ndarray, tau: np.ndarray, nn: float, big_t: float) -> float:
+    """
+    Largest z of an Allan variance excess at ``tau`` over white noise's (N^2 = ``nn``).
+
+    In units of white's spread N^2 / tau sqrt(2 / edf), edf = 1.5 T / tau (T = ``big_t``).
+    """
+    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
+    return float(z.max())
 
 
 def gm_avar(tau, sigma, tc):

@@ -36,6 +36,7 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
 Edges are set at z ~ 4 (a few sigma); weak and strong are 6-800x further above.
 """
 from gyro_char.sim.effects.vibration import resonance_coefficients
+from heldout_detect import allan_taus, allan_z
 import numpy as np
 from scipy import signal
 
@@ -156,12 +157,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         return (p['sigma'] ** 2 * np.sqrt(big_t)
                 / (4 * sig ** 2 * dt * np.sqrt(p['freq'] / p['q'])))
-    tau = np.geomspace(10 * dt, big_t / 10, 200)
+    tau = allan_taus(dt, big_t, 200)
     if name == 'bias_instability':
         excess = 2 * np.log(2) / np.pi * p['b'] ** 2 * np.ones_like(tau)
     elif name == 'rate_random_walk':
         excess = p['k'] ** 2 * tau / 3
     else:
         excess = gm_avar(tau, p['sigma'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -45,7 +45,7 @@ Edge levels (``detectability`` gives z for any level; N = n_arw, sigma = sig, T 
 Edges are set at z ~ 4; weak and strong are 8-1600x further above.
 """
 from gyro_char.sim.effects.vibration import resonance_coefficients
-from heldout_detect import gm_avar
+from heldout_detect import allan_taus, allan_z, gm_avar
 import numpy as np
 from scipy import signal
 
@@ -180,7 +180,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'quantization':
         v = p['step'] ** 2 / 12
         return 0.9 * 3 * v / (nn * dt) / np.sqrt(3 / n + 40 / (3 * n))
-    tau = np.geomspace(10 * dt, big_t / 10, 200)
+    tau = allan_taus(dt, big_t, 200)
     if name == 'bias_instability':
         a2 = p['b'] ** 2 * np.log(RTN_TC[1] / RTN_TC[0]) / np.pi
         excess = sum(gm_avar(tau, np.sqrt(a2), tc) for tc in RTN_TC)
@@ -188,5 +188,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         excess = p['k'] ** 2 * tau / 3
     else:
         excess = gm_avar(tau, p['sigma'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

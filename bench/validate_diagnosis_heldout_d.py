@@ -56,7 +56,7 @@ steps (0.06-0.48 deg/s) are a DSP output word cut to 8-11 bits; the Duffing shif
 4 % of f0.
 """
 from gyro_char.allan.expected import markov_avar
-from heldout_detect import gm_avar
+from heldout_detect import allan_taus, allan_z, gm_avar
 import numpy as np
 from scipy import signal
 
@@ -209,12 +209,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         band = p['freq'] / p['q'] + 2 * KAPPA * p['freq']
         return p['sigma'] ** 2 * np.sqrt(big_t) / (4 * sig ** 2 * dt * np.sqrt(band))
-    tau = np.geomspace(10 * dt, big_t / 10, 200)
+    tau = allan_taus(dt, big_t, 200)
     if name == 'bias_instability':
         excess = 2 * np.log(2) / np.pi * p['b'] ** 2 * np.ones_like(tau)
     elif name == 'rate_random_walk':
         excess = p['k'] ** 2 * (tau / 3 - markov_avar(tau, WALK_LAG))
     else:
         excess = gm_avar(tau, p['sigma'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

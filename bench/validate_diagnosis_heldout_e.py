@@ -66,7 +66,7 @@ over a +-25 degC oven ramp; the interpolation errors (3-15 % of a 0.28-0.42 mrad
 trimmed to a badly trimmed detector pair; the strong ODR mismatch is an 85 Hz ODR polled at
 100 Hz, the edge's 0.5 % an RC oscillator's tolerance.
 """
-from heldout_detect import gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, gm_avar, psd_avar
 import numpy as np
 from scipy import signal
 
@@ -221,12 +221,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         return (p['sigma'] ** 2 * np.sqrt(big_t)
                 / (4 * sig ** 2 * dt * np.sqrt(p['freq'] / p['q'])))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = psd_avar(lambda f: flicker_psd(f, p['b'], dt), tau, dt)
     elif name == 'rate_random_walk':
         excess = psd_avar(lambda f: heater_psd(f, p['k']), tau, dt)
     else:
         excess = gm_avar(tau, p['sigma'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -84,7 +84,7 @@ of 4, 16 and 32 codes (2.4, 9.6 and 19 arcsec).
 """
 from functools import lru_cache
 
-from heldout_detect import gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, gm_avar, psd_avar
 import numpy as np
 from scipy import signal, special, stats
 
@@ -315,12 +315,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         narrow = p['freq'] / p['q'] * (1 - PUMP)
         return (p['sigma'] ** 2 * (1 + PUMP) / 2 * np.sqrt(big_t)
                 / (4 * sig ** 2 * dt * np.sqrt(narrow)))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = psd_avar(lambda f: flicker_psd(f, p['b'], dt), tau, dt)
     elif name == 'rate_random_walk':
         excess = p['k'] ** 2 * tau / 3
     else:
         excess = gm_avar(tau, p['sigma'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

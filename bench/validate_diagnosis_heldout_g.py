@@ -83,7 +83,7 @@ arcsec; loop peaking of 0.2 dB (edge), 2.3 dB and 6 dB (a ~30 deg phase margin).
 """
 from functools import lru_cache
 
-from heldout_detect import gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, gm_avar, psd_avar
 import numpy as np
 from scipy import signal, stats
 
@@ -364,7 +364,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         ex, width = peaking_band(p['gain'], p['freq'], p['q'], dt)
         return ex * np.sqrt(big_t * width)
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         tau = tau[tau >= HOLD]
         excess = psd_avar(lambda f: held_flicker_psd(f, p['b']), tau, dt)
@@ -373,5 +373,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         excess = sum(gm_avar(tau, s, c) for s, c in zip(sd, tc))
     else:
         excess = gm_avar(tau, p['sigma'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -55,7 +55,7 @@ driven by q = 1.1e-8, 3e-8 and 1.5e-7 rad/s a sample; beats of 0.018, 0.057 and 
 rings of 0.14, 0.29 and 0.8 deg/s a strike (a 37 Hz, 37 Hz and 23 Hz mount mode).
 """
 from gyro_char.allan.expected import markov_avar
-from heldout_detect import psd_avar
+from heldout_detect import allan_taus, allan_z, psd_avar
 import numpy as np
 from scipy import signal
 
@@ -230,12 +230,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         ex, width = rattle_band(p['amplitude'], p['freq'], dt, sig)
         return ex * np.sqrt(big_t * width)
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = psd_avar(lambda f: trap_psd(f, p['b'], dt), tau, dt)
     elif name == 'rate_random_walk':
         excess = psd_avar(lambda f: walk_psd(f, p['q'], dt), tau, dt)
     else:
         excess = markov_avar(tau, p['tc']) * p['amplitude'] ** 2 / p['tc']
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -67,7 +67,7 @@ products of 0.0093, 0.057 and 0.17 deg/s sd (tc 2.5 s, 2.5 s and 40 s); vernier 
 of 36, 55 and 110 arcsec with fine gains 10 %, 15 % and 25 % off; demodulated modes of 0.023,
 0.11 and 0.34 deg/s sd at 35 Hz (width 3 Hz) and 28 Hz (width 5 Hz).
 """
-from heldout_detect import band_excess, gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar, psd_avar
 import numpy as np
 from scipy import signal, special
 
@@ -306,7 +306,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         ex, width = band_excess(lambda f: complex_pole_psd(f, p['sigma'], p['freq'], p['q'], dt),
                                 dt, sig)
         return ex * np.sqrt(big_t * width)
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = psd_avar(lambda f: slab_psd(f, p['b'], dt), tau, dt)
     elif name == 'rate_random_walk':
@@ -315,5 +315,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
                                     int(round(t / dt))) for t in tau])
     else:
         excess = gm_avar(tau, p['amplitude'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -65,7 +65,7 @@ pickoff amplitudes of 61000, 15000 and 5000 counts (angle error sd 1.2, 5 and 15
 velocity modes of 0.021, 0.11 and 0.34 deg/s sd at 21.5 Hz (width 2 Hz) and 33 Hz (width
 4 Hz).
 """
-from heldout_detect import band_excess, gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar, psd_avar
 import numpy as np
 from scipy import signal
 
@@ -276,7 +276,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         ex, width = band_excess(lambda f: velocity_mode_psd(f, p['sigma'], p['freq'], p['q'], dt),
                                 dt, sig)
         return float(ex * np.sqrt(big_t * width))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = psd_avar(lambda f: lagged_flicker_psd(f, p['b'], dt), tau, dt)
     elif name == 'rate_random_walk':
@@ -284,5 +284,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         excess = mean * walk_avar(np.round(tau / dt), p['q'])
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -70,7 +70,7 @@ rad/s/sqrt(s) (mean slips of 0.00037-0.0036 deg/s); blower-driven noise of 0.008
 and 0.11 deg/s sd (tc 3 s, 3 s and 30 s); fallback fringes of 10, 43 and 115 arcsec; aliased
 modes of 0.028, 0.11 and 0.34 deg/s sd, 137 Hz (width 6.9 Hz) and 172 Hz (width 11.5 Hz).
 """
-from heldout_detect import band_excess, gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar, psd_avar
 import numpy as np
 from scipy import signal, stats
 
@@ -323,12 +323,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
                (lambda f: aliased_psd(f, p['sigma'], p['freq'], p['q'], dt)))
         ex, width = band_excess(psd, dt, sig)
         return float(ex * np.sqrt(big_t * width))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = psd_avar(lambda f: nulled_flicker_psd(f, p['b'], dt), tau, dt)
     elif name == 'rate_random_walk':
         excess = walk_avar(np.round(tau / dt), p['k'] * np.sqrt(dt))
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

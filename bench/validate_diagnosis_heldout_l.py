@@ -67,7 +67,7 @@ Physical scale: absorbed fractions of 2.1 % (edge), 12 % and 40 %; passes of 0.0
 5 s and 40 s); counter steps of 4.2, 43 and 115 arcsec; chattering modes of 0.022, 0.11 and
 0.34 deg/s sd.
 """
-from heldout_detect import band_excess, gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar, psd_avar
 import numpy as np
 from scipy import signal, special
 from validate_diagnosis_heldout_k import walk_avar
@@ -337,12 +337,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
                (lambda f: clamp_psd(f, p['sigma'], dt)))
         ex, width = band_excess(psd, dt, sig)
         return float(ex * np.sqrt(big_t * width))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = psd_avar(lambda f: hopper_psd(f, p['b']), tau, dt)
     elif name == 'rate_random_walk':
         excess = walk_avar(np.round(tau / dt), p['k'] * np.sqrt(dt))
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -65,7 +65,7 @@ rad/s/sqrt(s); popcorn of 0.0099, 0.057 and 0.11 deg/s sd (bursts 0.033-0.38 deg
 2 s, 2 s and 20 s); float32 angles of 240, 2000 and 20000 rad (0.9, 7.7 and 77 days of the
 bias; spacings 3.1 -> 6.3, 25 and 403 arcsec); cable modes of 0.017, 0.11 and 0.34 deg/s sd.
 """
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 import numpy as np
 from scipy import signal, special
 from validate_diagnosis_heldout_k import walk_avar
@@ -313,12 +313,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
                (lambda f: cable_psd(f, p['sigma'], dt)))
         ex, width = band_excess(psd, dt, sig)
         return float(ex * np.sqrt(big_t * width))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = cov_avar(lambda u: flicker_cov(u, p['b']), tau)
     elif name == 'rate_random_walk':
         excess = walk_avar(np.round(tau / dt), p['k'] * np.sqrt(dt))
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

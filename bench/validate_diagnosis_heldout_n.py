@@ -68,7 +68,7 @@ rad/s/sqrt(s) at the start (s0 0.012-0.14 deg/s); traps of 0.0089, 0.057 and 0.1
 (tc 3 s, 3 s and 30 s); latch skews of 14 us, 0.3 ms and 2 ms; tuned mounts of 0.018, 0.069
 and 0.34 deg/s sd.
 """
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 import numpy as np
 from scipy import signal, special
 from validate_diagnosis_heldout_k import walk_avar
@@ -287,7 +287,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         ex, width = band_excess(lambda f: tmd_psd(f, p['sigma'], dt), dt, sig)
         return float(ex * np.sqrt(big_t * width))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'vibration':
         excess = cov_avar(lambda u: hum_cov(u, p['amplitude']), tau)
     elif name == 'bias_instability':
@@ -296,5 +296,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         excess = walk_avar(np.round(tau / dt), p['k'] * np.sqrt(dt)) * creep_mean_intensity(big_t)
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

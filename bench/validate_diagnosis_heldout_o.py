@@ -80,7 +80,7 @@ mounts of 0.025, 0.069 and 0.34 deg/s sd.
 """
 import math
 
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 import numpy as np
 from scipy import special
 from validate_diagnosis_heldout_k import walk_avar
@@ -316,12 +316,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         ex, width = band_excess(lambda f: loaded_psd(f, p['sigma'], dt, big_t), dt, sig)
         return float(ex * np.sqrt(big_t * width))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = cov_avar(lambda u: envelope_cov(u, p['b']), tau)
     elif name == 'rate_random_walk':
         excess = walk_avar(np.round(tau / dt), p['k'] * np.sqrt(dt))
     else:
         excess = sum(gm_avar(tau, np.sqrt(v), tc) for v, tc in fan_terms(p['sd'], p['tc']))
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

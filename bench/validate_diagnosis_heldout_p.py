@@ -77,7 +77,7 @@ deg/h sd; barrier walks of K 1.14e-6, 3e-6 and 1.5e-5 rad/s/sqrt(s); trap cluste
 mode rates of 0.028, 0.069 and 0.34 deg/s sd; freezes of 20 ms every 22 s, 50 ms every 5 s and
 200 ms every 2 s.
 """
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 import numpy as np
 from scipy import signal, special
 from validate_diagnosis_heldout_k import walk_avar
@@ -292,7 +292,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'stale_samples':
         q0 = repeat_share(sig)
         return float(p['freeze'] / p['period'] * np.sqrt(n * (1 - q0) / q0))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = cov_avar(lambda u: interference_cov(u, p['b']), tau)
     elif name == 'rate_random_walk':
@@ -300,5 +300,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         excess = walk_avar(np.round(tau / dt), p['k'] * np.sqrt(dt)) * np.expm1(x) / x
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -88,7 +88,7 @@ mdeg); heat soaks of A 0.0081, 0.029 and 0.11 deg/s (0.6, 2.1 and 8.5 degC at 0.
 0.057 and 0.14 deg/s sd (tc 2 s, 2 s and 20 s); output steps q of 28, 60 and 120 urad (words
 of 0.16, 0.34 and 0.69 deg/s); brackets of 0.020, 0.069 and 0.34 deg/s sd.
 """
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 import numpy as np
 from scipy import signal, special
 from validate_diagnosis_heldout_m import cov_avar
@@ -351,7 +351,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'resonance':
         ex, width = band_excess(lambda f: bracket_psd(f, p['sigma'], dt), dt, sig)
         return float(ex * np.sqrt(big_t * width))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = cov_avar(lambda u: flicker_cov(u, p['b']), tau) * mean_drive(big_t)
     elif name == 'rate_random_walk':
@@ -359,5 +359,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     else:
         tc, sd, w = p['tc'], p['sd'], 1 / (1 - LAG)
         excess = w * (gm_avar(tau, sd, tc) - LAG * gm_avar(tau, sd, LAG * tc))
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -93,7 +93,7 @@ after t_on; discharges of 0.0099, 0.057 and 0.14 deg/s sd (tc 2 s, 2 s and 20 s)
 periods Q of 0.34, 1.5 and 5 mrad (71, 310 and 1030 arcsec); brackets of 0.018, 0.069 and 0.34
 deg/s rms; latency excesses mu of 0.71 (edge), 2 and 6 ms.
 """
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 import numpy as np
 from scipy import signal
 from validate_diagnosis_heldout_k import walk_avar
@@ -363,12 +363,11 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'stale_samples':
         q0 = repeat_share(sig)
         return float(repeat_probability(p['mu'], dt) * np.sqrt(n * (1 - q0) / q0))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = cov_avar(lambda u: adsorption_cov(u, p['b']), tau)
     elif name == 'rate_random_walk':
         excess = walk_avar(np.round(tau / dt), p['k'] * np.sqrt(dt)) * (1 - ONSET / 2)
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

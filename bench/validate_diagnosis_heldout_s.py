@@ -108,7 +108,7 @@ deg/h sd; slips of K 2.0e-6, 6e-6 and 3e-5 rad/s/sqrt(s) at long times; switched
 (1 count a window = 0.12, 2.9 and 11 deg/s); looms of 0.018, 0.069 and 0.34 deg/s rms;
 deadbands of 0.0078 (edge), 0.029 and 0.11 deg/s.
 """
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 import numpy as np
 from scipy import signal, special
 from validate_diagnosis_heldout_n import dwell_states
@@ -481,7 +481,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         q0 = repeat_share(sig)
         s = deadband_share(p['delta'], sig)
         return float((s - q0) * np.sqrt(n / (q0 * (1 - q0))))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         sd = p['b'] / np.sqrt(TREE_TAUS.size)
         excess = sum(gm_avar(tau, sd, tt) for tt in TREE_TAUS)
@@ -490,5 +490,4 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     else:
         w, times = kinetics_terms(p['tc'])
         excess = sum(gm_avar(tau, p['sd'] * np.sqrt(wi), ti) for wi, ti in zip(w, times))
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)

@@ -127,7 +127,7 @@ every 178 s, 16 s and 3.2 s).
 import math
 
 import heldout_detect
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 
 import numpy as np
 
@@ -471,7 +471,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'stale_samples':
         q0 = repeat_share(sig)
         return float(p['eps'] * np.sqrt(n * (1 - q0) / q0))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         sd = p['b'] / np.sqrt(RESET_TAUS.size)
         excess = sum(gm_avar(tau, sd, tt) for tt in RESET_TAUS)
@@ -479,8 +479,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         excess = p['k'] ** 2 * tau / 3
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)
 
 
 def self_check(n: int = 720000) -> None:

@@ -83,7 +83,7 @@ Edges are set at z ~ 4; weak and strong are several to hundreds of times further
 """
 
 import heldout_detect
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 
 import numpy as np
 
@@ -316,15 +316,14 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'stale_samples':
         q0 = repeat_share(sig)
         return float(p['p'] * np.sqrt(n * (1 - q0) / q0))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = granular_avar(tau, p['b'])
     elif name == 'rate_random_walk':
         excess = p['k'] ** 2 * tau / 3
     else:
         excess = gm_avar(tau, p['sd'], p['tc'])
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)
 
 
 def self_check(n: int = 720000) -> None:

@@ -82,7 +82,7 @@ Edges are set at z ~ 4; weak and strong are several to hundreds of times further
 """
 
 import heldout_detect
-from heldout_detect import band_excess, gm_avar, psd_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar, psd_avar
 
 import numpy as np
 
@@ -394,7 +394,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'stale_samples':
         q0 = repeat_share(sig)
         return float(p['m'] / np.pi * np.sqrt(n * (1 - q0) / q0))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'temperature_drift':
         excess = psd_avar(draught_psd(p['amplitude']), tau, dt)
     elif name == 'bias_instability':
@@ -404,8 +404,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     else:
         tcs = kinetics_tc(np.linspace(0, big_t, 41) + 30.0, p['tc'])
         excess = np.mean([gm_avar(tau, p['sd'], tc) for tc in tcs], axis=0)
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)
 
 
 def self_check(n: int = 720000) -> None:

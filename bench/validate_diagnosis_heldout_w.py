@@ -116,7 +116,7 @@ poll (repeats 0.09 %, 1 % and 5 % of the polls; the phase 1.9, 21 and 106 sample
 2 h).
 """
 import heldout_detect
-from heldout_detect import band_excess, gm_avar
+from heldout_detect import allan_taus, allan_z, band_excess, gm_avar
 
 import numpy as np
 
@@ -538,7 +538,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
     if name == 'stale_samples':
         q0 = repeat_share(sig)
         return float(poll_repeats(p['walk']) * np.sqrt(n * (1 - q0) / q0))
-    tau = np.geomspace(10 * dt, big_t / 10, 60)
+    tau = allan_taus(dt, big_t)
     if name == 'bias_instability':
         excess = auto_zero_avar(tau, p['b'])
     elif name == 'rate_random_walk':
@@ -548,8 +548,7 @@ def detectability(name: str, params: dict, dt: float, sig: float, n_arw: float,
         w = w / w.sum()
         excess = sum(gm_avar(tau, p['sd'] * np.sqrt(wk), p['tc'] / (j + 1))
                      for j, wk in enumerate(w) if wk > 0)
-    z = excess / (nn / tau) * np.sqrt(1.5 * big_t / tau / 2)
-    return float(z.max())
+    return allan_z(excess, tau, nn, big_t)
 
 
 def self_check(n: int = 720000) -> None:

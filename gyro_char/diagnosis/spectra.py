@@ -279,8 +279,7 @@ def _add_wandering_tone(spec: ModelSpectrum, power: float, f0: float, wander_hz:
     f_out = float(fold(f_i, 1.0 / spec.dt))
     spec.peaks.append((f_out, wander.spread_hz(wander_hz, wander_s)))
     spec.envelopes.append((f_out, power * float(spec.h2(np.array([f_i]))[0] * spec.g2(f_out)),
-                           wander_hz,
-                           wander_s, len(spec.internal) - 1))
+                           wander_hz, wander_s, len(spec.internal) - 1))
 
 
 def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> ModelSpectrum:
