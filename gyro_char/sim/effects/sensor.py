@@ -85,10 +85,8 @@ class InternalLowpass(Effect):
 
     def internal(self, ctx, gyro, accel):
         h = self.kernel()
-        gyro = self._filter(h, gyro)
-        if self.accel:
-            accel = self._filter(h, accel)
-        return gyro, accel
+        return self._filter(h, [1.0], gyro), (self._filter(h, [1.0], accel) if self.accel
+                                              else accel)
 
     def output(self, ctx, gyro, accel):
         if not self.corner_hz:
@@ -97,19 +95,16 @@ class InternalLowpass(Effect):
             raise InputError(f'internal_lowpass: corner_hz {self.corner_hz:g} must be below '
                              f'the output Nyquist frequency {0.5 / ctx.dt:g} Hz')
         b, a = output_lowpass(self.corner_hz, int(self.order), ctx.dt)
-
-        def run(x):   # started in steady state on the first sample, like the averages
-            zi = signal.lfilter_zi(b, a)[None, :] * x[:, :1]
-            return signal.lfilter(b, a, x, axis=1, zi=zi)[0]
-        return run(gyro), (run(accel) if self.accel else accel)
+        return self._filter(b, a, gyro), (self._filter(b, a, accel) if self.accel else accel)
 
     @staticmethod
-    def _filter(h, x):
-        if h.size == 1:  # taps = 1: the identity (lfilter_zi needs a kernel of 2 or more)
-            return x * h[0]
-        # Start in steady state on the first sample so there is no start-up transient.
-        zi = signal.lfilter_zi(h, [1.0])[None, :] * x[:, :1]
-        y, _ = signal.lfilter(h, [1.0], x, axis=1, zi=zi)
+    def _filter(b, a, x):
+        """Filter the rows of ``x`` by (b, a), started in steady state on the first sample."""
+        if np.size(b) == 1 and np.size(a) == 1:   # the identity (a 1-tap kernel: no lfilter_zi)
+            return x * (b[0] / a[0])
+        # Steady state on the first sample: no start-up transient.
+        zi = signal.lfilter_zi(b, a)[None, :] * x[:, :1]
+        y, _ = signal.lfilter(b, a, x, axis=1, zi=zi)
         return y
 
     def noise_gain(self, decimation: int) -> float:
