@@ -49,6 +49,7 @@ def test_diagnose_static_finds_an_unannounced_tone_and_writes_the_contract(tmp_p
     assert abs(d['steps'][0]['params']['freq_hz'] - 23.0) < 0.3
     # ... down to what the simulation scores against itself
     assert d['final_gap'] < d['null_gap']['final_model_q95'] < d['baseline_gap']
+    assert d['verdict']['code'] == 'explained' and 'vibration' in d['verdict']['text']
     assert (out / 'diagnosis_gyro_x.png').stat().st_size > 10_000
     # The selected tone makes the band's steady envelope: no band is reported.
     assert d['non_gaussian_bands'] == []

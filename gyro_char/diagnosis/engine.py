@@ -33,6 +33,7 @@ from gyro_char.diagnosis.closed_form import ExpectedObjective
 from gyro_char.diagnosis.fit import EffectSpace, Evaluation, fit_effect, GapObjective
 from gyro_char.diagnosis.greedy import (
     backfit, could_trail, fit_on_top, gap_in, levels, look_alikes, prune, separating_run)
+from gyro_char.diagnosis.verdict import verdict
 from gyro_char.progress import progress
 import numpy as np
 
@@ -111,6 +112,8 @@ class Diagnosis:
     reals: List[Obs] = field(default_factory=list)
     # The final model as simulator effects (selected effects plus the tuned nuisance entry).
     model: list = field(default_factory=list)
+    # The one-line reading (``verdict.verdict``).
+    verdict: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return {
@@ -130,6 +133,7 @@ class Diagnosis:
             'refined': self.refined,
             'baseline': self.baseline,
             'model': [{'name': n, 'params': _jsonable(p)} for n, p in self.model],
+            'verdict': self.verdict,
         }
 
 
@@ -279,6 +283,10 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                 base_explained)
     evaluations['final'] = current
     model = selected + ([nuisance] if nuisance else [])
+    final_judged, final_q95 = base.gap, None
+    if selected:
+        final_judged, _, final_q95 = levels(objective, base, current, base_needed,
+                                            base_explained)
     return Diagnosis(
         kind=problem.kind, baseline_gap=base.gap, where=where, steps=steps,
         selected_effects=[n for n, _ in selected], final_gap=current.gap, ranking=ranking,
@@ -294,7 +302,9 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         refined={'gap_before': greedy_gap, 'gap_after': current.gap,
                  'params': {n: _jsonable(p) for n, p in selected}, 'dropped': dropped},
         evaluations=evaluations,
-        reals=problem.reals, model=model)
+        reals=problem.reals, model=model,
+        verdict=verdict(base.gap, base_explained, [n for n, _ in selected], final_judged,
+                        final_q95, ranking))
 
 
 def choose_among(objective, problem: Problem, selected: list, fits: dict,

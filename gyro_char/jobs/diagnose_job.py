@@ -292,6 +292,8 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
 def summary(channel: str, out: dict) -> str:
     lines = [f'{channel}: baseline gap {out["baseline_gap"]:.2f} (sim vs itself: '
              f'{out["null_gap"]["mean"]:.2f}, 95 % {out["null_gap"]["q95"]:.2f})']
+    if out.get('verdict'):
+        lines.append(f'  verdict: {out["verdict"]["code"]}: {out["verdict"]["text"]}')
     for w in out['where'][:4]:
         lines.append(f'  gap in {w["observable"]} over {w["range"][0]:.4g}-{w["range"][1]:.4g} '
                      f'{w["range_unit"]}: {w["excess"]:+.1f} sigma')
