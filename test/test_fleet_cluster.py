@@ -182,3 +182,4 @@ def test_manifest_of_mixed_kinds_equals_the_single_commands(cluster, tmp_path):
     for q in ('baseline_gap', 'final_gap'):
         assert float(got[q]['value']) == diagnosis[q]
     assert float(got['null_gap_q95']['value']) == diagnosis['null_gap']['q95']
+    assert got['final_gap']['message'].startswith(f"verdict: {diagnosis['verdict']['code']}; ")

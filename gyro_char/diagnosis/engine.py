@@ -23,6 +23,8 @@ twins of those records under a list of effects, and the candidate effects' searc
 6. refits the selected effects jointly (coordinate passes, each with the others fixed) and
    reports the final gap after that (``refined``); when the kind asks for it, then drops
    any selected effect the others have made redundant (``refined['dropped']``).
+7. reads the result in one line (``verdict``): consistent, explained, partly explained or
+   unexplained, from the same levels.
 """
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence

@@ -316,13 +316,14 @@ def summary(channel: str, out: dict) -> str:
 
 
 def tidy(per_channel: dict) -> List[dict]:
-    """Tidy rows of a diagnosis: each channel's gaps, the selected effects in the message."""
+    """Tidy rows of a diagnosis: each channel's gaps; verdict and effects in the message."""
     rows = []
     for ch, out in per_channel.items():
         chosen = ', '.join(out['selected_effects']) or 'none'
+        code = out.get('verdict', {}).get('code', 'n/a')
         rows += [measurement(ch, 'baseline_gap', out['baseline_gap'], '1'),
                  measurement(ch, 'final_gap', out['final_gap'], '1',
-                             message=f'selected effects: {chosen}'),
+                             message=f'verdict: {code}; selected effects: {chosen}'),
                  measurement(ch, 'null_gap_q95', out['null_gap']['q95'], '1'),
                  measurement(ch, 'effects_selected', len(out['selected_effects']), '1')]
     return rows
