@@ -10,19 +10,20 @@ BUMP = np.r_[np.ones(6), -np.ones(6)]
 
 
 @pytest.mark.parametrize('args, code', [
-    ((1.02, 1.08, [], 1.02, None), 'consistent'),
-    ((1.30, 1.08, [], 1.30, None), 'unexplained'),
-    ((9.00, 1.08, ['vibration'], 1.01, 1.10), 'explained'),
-    ((9.00, 1.08, ['vibration'], 2.50, 1.10), 'partly_explained'),
+    ((1.02, 1.08, [], 1.02, 1.02, None), 'consistent'),
+    ((1.30, 1.08, [], 1.30, 1.30, None), 'unexplained'),
+    ((9.00, 1.08, ['vibration'], 1.20, 1.01, 1.10), 'explained'),
+    ((9.00, 1.08, ['vibration'], 3.70, 2.50, 1.10), 'partly_explained'),
 ])
 def test_each_reading_follows_from_the_levels(args, code):
     v = verdict(*args, RANKING)
     assert v['code'] == code
-    assert v['final_gap_judged'] == args[3]
+    assert v['final_gap_judged'] == args[4]
     if code == 'unexplained':
         assert 'resonance, gauss_markov' in v['text'] and 'vibration' not in v['text']
     if code in ('explained', 'partly_explained'):
-        assert 'vibration' in v['text'] and v['final_model_q95'] == args[4]
+        assert 'vibration' in v['text'] and v['final_model_q95'] == args[5]
+        assert f'{args[3]:.2f} in the baseline' in v['text']
 
 
 def _problem(bump: float, spike: float):

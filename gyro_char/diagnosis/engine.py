@@ -305,8 +305,8 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                  'params': {n: _jsonable(p) for n, p in selected}, 'dropped': dropped},
         evaluations=evaluations,
         reals=problem.reals, model=model,
-        verdict=verdict(base.gap, base_explained, [n for n, _ in selected], final_judged,
-                        final_q95, ranking))
+        verdict=verdict(base.gap, base_explained, [n for n, _ in selected], current.gap,
+                        final_judged, final_q95, ranking))
 
 
 def choose_among(objective, problem: Problem, selected: list, fits: dict,

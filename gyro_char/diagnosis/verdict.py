@@ -18,8 +18,14 @@ UNEXPLAINED = 'unexplained'
 
 
 def verdict(baseline_gap: float, baseline_q95: float, selected: Sequence[str],
-            final_judged: float, final_q95: Optional[float], ranking: Sequence[dict]) -> dict:
-    """Return ``{'code', 'text', 'final_gap_judged', 'final_model_q95'}`` (module docstring)."""
+            final_gap: float, final_judged: float, final_q95: Optional[float],
+            ranking: Sequence[dict]) -> dict:
+    """
+    Return ``{'code', 'text', 'final_gap_judged', 'final_model_q95'}`` (module docstring).
+
+    ``final_gap`` is in the baseline's scatter (``diagnosis.json``'s), ``final_judged`` in
+    the yardstick widened where the final model scatters more (a noise process's).
+    """
     out = {'final_gap_judged': float(final_judged),
            'final_model_q95': None if final_q95 is None else float(final_q95)}
     if baseline_gap <= baseline_q95:
@@ -36,11 +42,13 @@ def verdict(baseline_gap: float, baseline_q95: float, selected: Sequence[str],
                         f'detectability or outside the catalogue (nearest: {nearest}); a '
                         'longer record would tell'}
     names = ' + '.join(selected)
+    left = (f"what is left ({final_judged:.2f} in the final model's widened scatter, "
+            f"{final_gap:.2f} in the baseline's)")
     if final_q95 is not None and final_judged <= final_q95:
         return {'code': EXPLAINED, **out,
-                'text': f'explained by {names}: what is left ({final_judged:.2f}) is within '
-                        f"the final model's own scatter ({final_q95:.2f})"}
+                'text': f"explained by {names}: {left} is within the final model's own "
+                        f'95 % level ({final_q95:.2f})'}
     return {'code': PARTLY, **out,
-            'text': f'partly explained by {names}: what is left ({final_judged:.2f}) is '
-                    f"above the final model's own scatter ({final_q95:.2f}); a further "
-                    'effect, or a form the catalogue lacks'}
+            'text': f"partly explained by {names}: {left} is above the final model's own "
+                    f'95 % level ({final_q95:.2f}); a further effect, or a form the '
+                    'catalogue lacks'}
