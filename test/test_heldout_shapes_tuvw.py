@@ -1,13 +1,13 @@
-# Held-out sets T, U, V and W (bench/validate_diagnosis_heldout_{t,u,v,w}.py, static only):
-# the generators do what their docstrings claim, and the static harness reaches them by
-# --held-out t / u / v / w. THE GENERATORS only, never the diagnosis.
+# Held-out sets T, U, V, W and X (bench/validate_diagnosis_heldout_{t,u,v,w,x}.py, static
+# only): the generators do what their docstrings claim, and the static harness reaches them by
+# --held-out t / u / v / w / x. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES, white
 import numpy as np
 import pytest
 from scipy import signal
 
-SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuvw'}
+SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuvwx'}
 SHAPES = {k: m.shapes(DT, SIG, N_ARW) for k, m in SETS.items()}
 
 
@@ -76,3 +76,30 @@ def test_v_clock_repeats_a_share_m_over_pi():
     x = white(720000, 7)
     y = fn(x.copy(), rng(7), **levels[1])
     assert np.mean(y[1:] == y[:-1]) == pytest.approx(levels[1]['m'] / np.pi, rel=0.1)
+
+
+def test_x_notch_cuts_a_hole_and_keeps_dc_and_nyquist():
+    fn, levels = SHAPES['x']['internal_lowpass']
+    y = fn(white(2 ** 18, 8), rng(8), **levels[1])
+    f, p = signal.welch(y, fs=1.0 / DT, nperseg=4096)
+    near = [p[np.argmin(np.abs(f - hz))] / (2 * SIG ** 2 * DT) for hz in (29.3, 5.0, 49.0)]
+    assert near[0] < 0.05 and near[1:] == pytest.approx([1.0, 1.0], abs=0.1)
+
+
+def test_x_half_carry_rate_error_has_lag_1_correlation_minus_0_4():
+    fn, levels = SHAPES['x']['quantization']
+    x = white(400000, 9)
+    err = fn(x.copy(), rng(9), **levels[0]) - x
+    err = err - err.mean()
+    assert np.mean(err[1:] * err[:-1]) / np.mean(err * err) == pytest.approx(-0.4, abs=0.02)
+
+
+def test_x_failed_checks_hold_negative_words_far_more_often():
+    fn, levels = SHAPES['x']['stale_samples']
+    x = white(400000, 10)
+    y = fn(x.copy(), rng(10), **levels[1])
+    held = y != x
+    negative = np.round(x / (0.05 * np.pi / 180.0)) < 0
+    eps = levels[1]['eps']
+    assert np.mean(held[negative]) > 10 * eps and np.mean(held[~negative]) < 5 * eps
+    assert np.mean(held) == pytest.approx(SETS['x'].crc_share(eps, SIG), rel=0.05)
