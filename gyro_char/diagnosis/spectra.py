@@ -16,7 +16,8 @@ warm-up is a deterministic mean term. Stale samples (an output sample repeating 
 one) act last, on the whole output (``holds.Holds``). ``ModelSpectrum`` holds the result
 for one model; every observable's expectation is a linear functional of it
 (``gyro_char.diagnosis.expected``). The output step is taken as white rounding noise
-(lsb^2 / 12 per sample), exact enough when the per-sample noise exceeds half a step.
+(lsb^2 / 12 per sample, exact while the per-sample noise exceeds about half a step; below,
+given the rate's mean, the exact excess of rounding the white noise: ``rounding``).
 """
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -24,7 +25,7 @@ import threading
 from typing import Callable, List, Optional, Sequence, Tuple
 
 from gyro_char.allan.expected import moving_average_kernel
-from gyro_char.diagnosis import wander
+from gyro_char.diagnosis import rounding, wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
 from gyro_char.sim.effects.sensor import output_lowpass_gain2
@@ -282,13 +283,32 @@ def _add_wandering_tone(spec: ModelSpectrum, power: float, f0: float, wander_hz:
                            wander_hz, wander_s, len(spec.internal) - 1))
 
 
-def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> ModelSpectrum:
+def _rounding(n_white: float, lsb: float, dt: float, bias: Optional[float]) -> float:
+    """
+    Variance the output step adds per sample.
+
+    The output's variance is kept above a tenth of the white noise's and a thousandth of
+    lsb^2 / 12: a baseline that rounds to a constant (forced; ``fit_baseline`` gives no step
+    to a record varying less than lsb^2 / 12) must not make every spread zero.
+    """
+    if bias is None:
+        return lsb * lsb / 12.0
+    sigma2 = n_white * n_white / dt
+    return max(rounding.excess(sigma2, bias, lsb), -0.9 * sigma2,
+               1e-3 * lsb * lsb / 12.0 - sigma2)
+
+
+def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
+                   bias: Optional[float] = None) -> ModelSpectrum:
     """
     Return the output spectrum of a static twin: white rate noise N, output step, ``effects``.
 
     ``n_white`` is the baseline's N at the output (the twin scales the internal white noise by
-    the filter's and the holds' long-tau gains so that the output keeps N). Raises ValueError
-    for an effect without a closed form (a motion or encoder effect).
+    the filter's and the holds' long-tau gains so that the output keeps N). The step adds
+    lsb^2 / 12 of white noise, or, given the rate's mean ``bias``, what rounding the white
+    noise N^2 / dt there exactly adds (``rounding.excess``: differs only for a step coarser
+    than 1.2 per-sample sd). Raises ValueError for an effect without a closed form (a motion
+    or encoder effect).
     """
     decim, taps, stages, holds, corner, order = 1, 1, 1, None, 0.0, 0
     for name, p in effects:
@@ -305,7 +325,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence) -> 
     dt_i = dt / decim
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,
                          white_int=(n_white / gain) ** 2,
-                         output_white=lsb * lsb / 12.0 * dt, corner_hz=corner,
+                         output_white=_rounding(n_white, lsb, dt, bias) * dt, corner_hz=corner,
                          order=order if corner else 0)
     for name, p in effects:
         if name not in CLOSED_FORM:

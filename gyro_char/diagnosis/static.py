@@ -199,7 +199,7 @@ def static_spaces(base: StaticBaseline, x: np.ndarray,
     # A wandering tone only where the peak's band has a steadier envelope than noise: the
     # form can mimic a mode's band, which only the fourth moment tells apart.
     wander = bool(tones.size) and steady_envelope(
-        y, dt, f_tone, model_spectrum(base.N, base.lsb, dt, []))
+        y, dt, f_tone, model_spectrum(base.N, base.lsb, dt, [], bias=base.bias))
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
     # A transient that started mid-record: from the record's change point (the extremum of

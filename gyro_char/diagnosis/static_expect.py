@@ -13,6 +13,7 @@ from typing import Sequence
 from gyro_char.diagnosis import expected, expected_tone, spread
 from gyro_char.diagnosis import gap as diag_gap
 from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis import rounding
 from gyro_char.diagnosis import static as ds
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
 from gyro_char.diagnosis.fit import EffectSpace, Param
@@ -47,7 +48,7 @@ class StaticExpect:
         self.log_bias = []
         for lay in self.layouts:
             g = expected.grids(lay.n, lay.dt)
-            spec = model_spectrum(base.N, base.lsb, base.dt, [])
+            spec = model_spectrum(base.N, base.lsb, base.dt, [], bias=base.bias)
             self.log_bias.append(spread.log_adev_moments(spread.adev_edf(spec, g))[0])
 
     def _deterministic(self, i, spec):
@@ -65,7 +66,7 @@ class StaticExpect:
     def spectrum(self, effects: list):
         """Return the model spectrum of the baseline plus ``effects`` (nuisance included)."""
         b, fx = _split(self.base, effects)
-        return model_spectrum(b.N, b.lsb, b.dt, fx)
+        return model_spectrum(b.N, b.lsb, b.dt, fx, bias=b.bias)
 
     def __call__(self, i: int, effects: list) -> ExpectedStats:
         spec = self.spectrum(effects)
@@ -90,7 +91,9 @@ def calibrate_n(base, x: np.ndarray):
 
     The closed-form counterpart of ``diag_static.calibrate_n``: the expected median of the
     Welch bins in 1-5 % of the sample rate (white rate noise plus the output step's rounding
-    noise, the bins' chi-square median included) against the record's.
+    noise, the bins' chi-square median included) against the record's. Where the step is
+    coarser than ``rounding.EXACT_BELOW`` per-sample sd, the white noise whose exactly
+    rounded variance is the record's white level (``rounding.sigma_for``).
     """
     real = ds.white_level(x, base.dt)
     lay = obs.static_layout(x.size, base.dt)
@@ -103,7 +106,12 @@ def calibrate_n(base, x: np.ndarray):
     model_white = float(np.median(noise[band])) - white_out
     real_white = real / med - white_out
     ratio = max(real_white, 1e-300) / max(model_white, 1e-300)
-    return replace(base, N=base.N * float(np.sqrt(ratio)))
+    n_white = base.N * float(np.sqrt(ratio))
+    if base.lsb > 0.0 and (real_white <= 0.0 or model_white <= 0.0
+                           or n_white < rounding.EXACT_BELOW * base.lsb * np.sqrt(base.dt)):
+        sigma = rounding.sigma_for(real / med / (2.0 * base.dt), base.bias, base.lsb)
+        n_white = sigma * np.sqrt(base.dt)
+    return replace(base, N=n_white)
 
 
 def white_band_spread(n: int, dt: float) -> float:
