@@ -70,6 +70,10 @@ CASES = {
     'dlpf_under_quantizer_and_tone': [('quantization', {'step_rad': 2e-4, 'dither': 1.0}),
                                       ('vibration', {'amplitude': 3e-3, 'freq_hz': 41.3}),
                                       DLPF],
+    # An output-rate notch beside a low-pass and a tone: the line at the notch is cut too.
+    'notch_with_dlpf_and_tone': [('internal_lowpass', {**DLPF[1], 'notch_hz': 23.0,
+                                                       'notch_q': 4.0}),
+                                 ('vibration', {'amplitude': 3e-3, 'freq_hz': 24.1})],
 }
 
 

@@ -10,7 +10,7 @@ stage has an exact discrete-time PSD, so the twin's output PSD is
     S_out(f) = |G(f)|^2 sum_r |H(f + r fs)|^2 S_int(f + r fs) + S_q(f) + S_lsb(f),   r = 0..D-1
 
 (decimation folds the D images of the internal band; two-sided, per Hz; G is the sensor's
-output-rate low-pass, if any, whose delay of a slow warm-up is neglected). Tones are lines,
+output-rate low-pass and notch, if any, their delay of a slow warm-up neglected). Tones are lines,
 folded the same way, but a tone whose frequency wanders is a noise part (``wander``); a
 warm-up is a deterministic mean term. Stale samples (an output sample repeating the previous
 one) act last, on the whole output (``holds.Holds``). ``ModelSpectrum`` holds the result
@@ -28,7 +28,7 @@ from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import rounding, wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
-from gyro_char.sim.effects.sensor import output_lowpass_gain2
+from gyro_char.sim.effects.sensor import output_lowpass_gain2, output_notch_gain2
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines, WANDER_S
 import numpy as np
 
@@ -135,9 +135,12 @@ class ModelSpectrum:
     # noise's spectrum; ``band_kurtosis``): (f_out, mean square, wander_hz, wander_s, index
     # in ``internal``).
     envelopes: List[tuple] = field(default_factory=list)
-    # The output-rate filters (``internal_lowpass`` corner_hz, order): 0 for none.
+    # The output-rate filters (``internal_lowpass`` corner_hz, order; notch_hz, notch_q): 0
+    # for none.
     corner_hz: float = 0.0
     order: int = 0
+    notch_hz: float = 0.0
+    notch_q: float = 0.0
     _hold_terms: dict = field(default_factory=dict, repr=False)
 
     def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
@@ -171,11 +174,19 @@ class ModelSpectrum:
             out = out * ratio
         return out
 
+    @property
+    def filtered(self) -> bool:
+        """Whether an output-rate filter is set (``g2`` is not 1)."""
+        return bool(self.corner_hz or self.notch_hz)
+
     def g2(self, f) -> np.ndarray:
-        """|G(f)|^2 of the output-rate low-pass at output frequencies ``f`` (1 without one)."""
-        if not self.corner_hz:
-            return np.ones(np.shape(f))
-        return output_lowpass_gain2(f, self.corner_hz, self.order, self.dt)
+        """|G(f)|^2 of the output-rate low-pass and notch at output frequencies ``f``."""
+        out = np.ones(np.shape(f))
+        if self.corner_hz:
+            out = out * output_lowpass_gain2(f, self.corner_hz, self.order, self.dt)
+        if self.notch_hz:
+            out = out * output_notch_gain2(f, self.notch_hz, self.notch_q, self.dt)
+        return out
 
     def images(self, f: np.ndarray) -> list:
         """
@@ -238,7 +249,7 @@ class ModelSpectrum:
             for i in sel:
                 s += self.internal[i](s2)
             total += h2 * s
-        if self.corner_hz:
+        if self.filtered:
             total *= self.g2(f)
         s_sin = np.sin(np.pi * f * self.dt)
         total += self.output_white + self.angle_var * 4.0 * s_sin * s_sin / self.dt
@@ -310,12 +321,14 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
     than 1.2 per-sample sd). Raises ValueError for an effect without a closed form (a motion
     or encoder effect).
     """
-    decim, taps, stages, holds, corner, order = 1, 1, 1, None, 0.0, 0
+    decim, taps, stages, holds, corner, order, notch = 1, 1, 1, None, 0.0, 0, (0.0, 0.0)
     for name, p in effects:
         if name == 'internal_lowpass':
             decim = max(decim, int(p.get('decimation', 1.0)))
             taps, stages = int(p['taps']), int(p.get('stages', 2.0))
             corner, order = p.get('corner_hz', 0.0), int(p.get('order', 2.0))
+            if p.get('notch_hz', 0.0):
+                notch = (p['notch_hz'], p.get('notch_q', 5.0))
         elif name == 'stale_samples':
             holds = Holds.from_params(p)
     h = moving_average_kernel(taps, stages)
@@ -326,7 +339,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,
                          white_int=(n_white / gain) ** 2,
                          output_white=_rounding(n_white, lsb, dt, bias) * dt, corner_hz=corner,
-                         order=order if corner else 0)
+                         order=order if corner else 0, notch_hz=notch[0], notch_q=notch[1])
     for name, p in effects:
         if name not in CLOSED_FORM:
             raise ValueError(f'effect {name} has no closed-form static spectrum')

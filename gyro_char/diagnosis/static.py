@@ -22,7 +22,8 @@ from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.holds import Holds, repeat_excess, repeat_runs, REPEAT_Z
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.diagnosis.starts import markov_start
-from gyro_char.diagnosis.static_bands import resonance_space, vibration_space, with_gap_band
+from gyro_char.diagnosis.static_bands import (
+    resonance_space, vibration_space, with_gap_band, with_notch_band)
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
 from gyro_char.errors import InputError
 from gyro_char.sim import simulator
@@ -380,8 +381,9 @@ def static_problem(records: Sequence[np.ndarray], dt: float, *, channel: str = '
                    baseline=base.to_json(),
                    nuisance=EffectSpace(NUISANCE, [Param('n_scale', 0.95, 1.05)]),
                    context=base, unresolved=unresolved_pairs(len(recs)),
-                   reseed=lambda where: with_gap_band(spaces, where, base.N / np.sqrt(dt), dt,
-                                                      span),
+                   reseed=lambda where: with_notch_band(
+                       with_gap_band(spaces, where, base.N / np.sqrt(dt), dt, span), where, dt,
+                       span),
                    prune=True)
 
 

@@ -1,5 +1,5 @@
 """
-Search spaces of the static narrow-band effects: ``vibration`` and ``resonance``.
+Search spaces of the static narrow-band effects: ``vibration``, ``resonance``, a notch.
 
 Both start from what the record's Welch PSD shows: the strongest narrow peak, the narrow lines
 (a comb, further tones) and the highest broad bump (a structural mode with no narrow peak:
@@ -71,6 +71,35 @@ def with_gap_band(spaces: Sequence[EffectSpace], where: Sequence[dict], sig_samp
             if space.name == 'resonance' and not any(
                 _centre_in(s, centre) for s in (space,) + tuple(space.alternatives))
             else space for space in spaces]
+
+
+def with_notch_band(spaces: Sequence[EffectSpace], where: Sequence[dict], dt: float,
+                    psd_span: Sequence[float]) -> List[EffectSpace]:
+    """
+    Return ``spaces`` with an ``internal_lowpass`` notch started at the PSD's deepest dip.
+
+    A notch (``notch_hz``, ``notch_q``) takes a band out of the spectrum and keeps the rest:
+    the gap's location (``where``: a run of Welch bins standing below the baseline's scatter)
+    says where, its width gives q's start: the deepest dip with room on both sides within
+    ``psd_span``, at most ``BAND_MAX_RATIO`` wide (a fall towards the top of the spectrum is
+    a low-pass's). No such dip, no notch searched: a notch can fit no noise where none shows.
+    """
+    def inside(lo, hi):
+        return (psd_span[0] < lo and hi < psd_span[1] and hi <= BAND_MAX_RATIO * lo
+                and np.sqrt(lo * hi) < 0.45 / dt)
+    dips = [w for w in where if w['observable'] == 'psd' and w['excess'] < 0.0
+            and inside(*w['range'])]
+    if not dips:
+        return list(spaces)
+    lo, hi = min(dips, key=lambda w: w['excess'])['range']
+    centre = float(np.sqrt(lo * hi))
+    q = float(np.clip(centre / max(hi - lo, 1e-9), 0.5, 100.0))
+    notch = EffectSpace('internal_lowpass', [
+        Param('notch_hz', 0.85 * lo, min(1.15 * hi, 0.45 / dt), log=False, init=centre),
+        Param('notch_q', 0.5, 100.0, init=q)],
+        fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0})
+    return [replace(space, alternatives=tuple(space.alternatives) + (notch,))
+            if space.name == 'internal_lowpass' else space for space in spaces]
 
 
 def _centre_in(space: EffectSpace, f: float) -> bool:

@@ -37,6 +37,19 @@ def output_lowpass_gain2(f, corner_hz: float, order: int, dt: float) -> np.ndarr
     return 1.0 / (1.0 + ratio ** (2 * int(order)))
 
 
+def output_notch(notch_hz: float, q: float, dt: float) -> tuple:
+    """(b, a) of the output-rate notch (second-order IIR band-stop, -3 dB width notch_hz / q)."""
+    return signal.iirnotch(notch_hz, q, fs=1.0 / dt)
+
+
+def output_notch_gain2(f, notch_hz: float, q: float, dt: float) -> np.ndarray:
+    """|N(f)|^2 of ``output_notch`` at output frequencies ``f``."""
+    b, a = output_notch(notch_hz, q, dt)
+    z = np.exp(-2j * np.pi * np.asarray(f, dtype=np.float64) * dt)
+    h = (b[0] + b[1] * z + b[2] * z * z) / (a[0] + a[1] * z + a[2] * z * z)
+    return np.abs(h) ** 2
+
+
 @register
 class InternalLowpass(Effect):
     """The sensor's own digital smoothing: averaging at the internal rate, an output low-pass."""
@@ -54,14 +67,19 @@ class InternalLowpass(Effect):
                'the digital low-pass most MEMS IMUs apply at the output data rate (a '
                'programmable DLPF): a Butterworth of the given order, mapped bilinearly, so '
                'its response falls to zero at the output Nyquist frequency; its DC gain is '
-               '1, so N is unchanged. It acts on the decimated output before any '
+               '1, so N is unchanged. notch_hz > 0 adds a notch at the output rate (the '
+               'band-stop flight controllers and robot IMU drivers put on a motor or '
+               'propeller frequency): a second-order IIR of -3 dB width notch_hz / '
+               'notch_q, unity gain elsewhere. Both act on the decimated output before any '
                'output-stage error (angle quantization, stale samples).')
     PARAMS = {'taps': (4.0, 'samples', 'moving-average length N at the internal rate'),
               'stages': (2.0, '-', 'cascaded averages (2: Bartlett triangle, 1: boxcar)'),
               'decimation': (1.0, '-', 'internal samples per output sample'),
               'accel': (1.0, '-', '1: accelerometers are filtered too'),
               'corner_hz': (0.0, 'Hz', 'output-rate low-pass corner (0: none)'),
-              'order': (2.0, '-', 'its Butterworth order (1 or 2)')}
+              'order': (2.0, '-', 'its Butterworth order (1 or 2)'),
+              'notch_hz': (0.0, 'Hz', 'output-rate notch centre (0: none)'),
+              'notch_q': (5.0, '-', 'its quality: centre / -3 dB width')}
     output_stage = 0
 
     def check(self):
@@ -70,11 +88,15 @@ class InternalLowpass(Effect):
                 raise InputError(f'internal_lowpass: {key} must be a whole number >= 1')
         if self.corner_hz < 0.0 or self.order not in (1.0, 2.0):
             raise InputError('internal_lowpass: corner_hz must be >= 0 and order 1 or 2')
+        if self.notch_hz < 0.0 or self.notch_q <= 0.0:
+            raise InputError('internal_lowpass: notch_hz must be >= 0 and notch_q > 0')
 
     def describe(self):
-        out = describe_without(self, 'corner_hz')
+        out = describe_without(self, 'corner_hz', 'notch_hz')
         if 'corner_hz' not in out['params']:
             del out['params']['order']
+        if 'notch_hz' not in out['params']:
+            del out['params']['notch_q']
         return out
 
     def kernel(self) -> np.ndarray:
@@ -89,13 +111,19 @@ class InternalLowpass(Effect):
                                               else accel)
 
     def output(self, ctx, gyro, accel):
-        if not self.corner_hz:
-            return gyro, accel
-        if self.corner_hz >= 0.5 / ctx.dt:
-            raise InputError(f'internal_lowpass: corner_hz {self.corner_hz:g} must be below '
-                             f'the output Nyquist frequency {0.5 / ctx.dt:g} Hz')
-        b, a = output_lowpass(self.corner_hz, int(self.order), ctx.dt)
-        return self._filter(b, a, gyro), (self._filter(b, a, accel) if self.accel else accel)
+        for key in ('corner_hz', 'notch_hz'):
+            if self.params[key] >= 0.5 / ctx.dt:
+                raise InputError(f'internal_lowpass: {key} {self.params[key]:g} must be below '
+                                 f'the output Nyquist frequency {0.5 / ctx.dt:g} Hz')
+        filters = []
+        if self.corner_hz:
+            filters.append(output_lowpass(self.corner_hz, int(self.order), ctx.dt))
+        if self.notch_hz:
+            filters.append(output_notch(self.notch_hz, self.notch_q, ctx.dt))
+        for b, a in filters:
+            gyro = self._filter(b, a, gyro)
+            accel = self._filter(b, a, accel) if self.accel else accel
+        return gyro, accel
 
     @staticmethod
     def _filter(b, a, x):
