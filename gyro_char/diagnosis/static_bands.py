@@ -1,9 +1,11 @@
 """
 Search spaces of the static narrow-band effects: ``vibration``, ``resonance``, a notch.
 
-Both start from what the record's Welch PSD shows: the strongest narrow peak, the narrow lines
-(a comb, further tones) and the highest broad bump (a structural mode with no narrow peak:
-a mode folded from above the output Nyquist frequency, or one sensed in rate).
+Each starts from what the record's Welch PSD shows: the strongest narrow peak, the narrow
+lines (a comb, further tones) and the highest broad bump (a structural mode with no narrow
+peak: a mode folded from above the output Nyquist frequency, or one sensed in rate); the
+gap's own highest band (a weak mode) and deepest dip (an output-rate notch of
+``internal_lowpass``).
 """
 from dataclasses import replace
 from typing import List, Optional, Sequence
