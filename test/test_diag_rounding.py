@@ -57,7 +57,7 @@ def test_a_clean_record_on_a_coarse_grid_is_consistent_with_its_baseline(q_over_
 
 
 def test_a_tone_on_a_coarse_grid_is_named():
-    n = 2 ** 17
+    n = 2 ** 16
     tone = 4e-3 * np.sin(2 * np.pi * 17.3 * np.arange(n) * DT)
     x = _coarse(n, 5, 3.0, 0.3, extra=tone)
     d = run(static_expect.closed_form_problem([x], DT, seed=3), seed=3)
