@@ -285,13 +285,14 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                 base_explained)
     evaluations['final'] = current
     model = selected + ([nuisance] if nuisance else [])
+    names = [n for n, _ in selected]
     final_judged, final_q95 = base.gap, None
     if selected:
         final_judged, _, final_q95 = levels(objective, base, current, base_needed,
                                             base_explained)
     return Diagnosis(
         kind=problem.kind, baseline_gap=base.gap, where=where, steps=steps,
-        selected_effects=[n for n, _ in selected], final_gap=current.gap, ranking=ranking,
+        selected_effects=names, final_gap=current.gap, ranking=ranking,
         null_gap={'mean': float(np.mean(null)), 'std': float(np.std(null, ddof=1)),
                   'q95': float(np.quantile(null, 0.95)), 'repeats': repeats,
                   'final_model_q95': explained, 'shrink_needed': shrink_needed,
@@ -305,8 +306,8 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                  'params': {n: _jsonable(p) for n, p in selected}, 'dropped': dropped},
         evaluations=evaluations,
         reals=problem.reals, model=model,
-        verdict=verdict(base.gap, base_explained, [n for n, _ in selected], current.gap,
-                        final_judged, final_q95, ranking))
+        verdict=verdict(base.gap, base_explained, names, current.gap, final_judged, final_q95,
+                        ranking))
 
 
 def choose_among(objective, problem: Problem, selected: list, fits: dict,

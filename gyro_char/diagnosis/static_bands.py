@@ -46,6 +46,12 @@ def resonance_space(sig_sample: float, f_tone: float, dt: float,
     return main
 
 
+def _with_room(lo: float, hi: float, dt: float, psd_span: Sequence[float]) -> bool:
+    """Whether the gap's band [lo, hi] Hz has room on both sides, is narrow and not at Nyquist."""
+    return (psd_span[0] < lo and hi < psd_span[1] and hi <= BAND_MAX_RATIO * lo
+            and np.sqrt(lo * hi) < 0.45 / dt)
+
+
 def with_gap_band(spaces: Sequence[EffectSpace], where: Sequence[dict], sig_sample: float,
                   dt: float, psd_span: Sequence[float]) -> List[EffectSpace]:
     """
@@ -64,8 +70,7 @@ def with_gap_band(spaces: Sequence[EffectSpace], where: Sequence[dict], sig_samp
         return list(spaces)
     lo, hi = max(bands, key=lambda w: w['excess'])['range']
     centre = float(np.sqrt(lo * hi))
-    if (lo <= psd_span[0] or hi >= psd_span[1] or hi > BAND_MAX_RATIO * lo
-            or centre >= 0.45 / dt):
+    if not _with_room(lo, hi, dt, psd_span):
         return list(spaces)
     q = float(np.clip(centre / max(hi - lo, 1e-9), 1.0, 300.0))
     band = _mode_space(sig_sample, min(lo, 0.85 * centre), max(hi, 1.15 * centre), dt, q)
@@ -86,11 +91,8 @@ def with_notch_band(spaces: Sequence[EffectSpace], where: Sequence[dict], dt: fl
     ``psd_span``, at most ``BAND_MAX_RATIO`` wide (a fall towards the top of the spectrum is
     a low-pass's). No such dip, no notch searched: a notch can fit no noise where none shows.
     """
-    def inside(lo, hi):
-        return (psd_span[0] < lo and hi < psd_span[1] and hi <= BAND_MAX_RATIO * lo
-                and np.sqrt(lo * hi) < 0.45 / dt)
     dips = [w for w in where if w['observable'] == 'psd' and w['excess'] < 0.0
-            and inside(*w['range'])]
+            and _with_room(*w['range'], dt, psd_span)]
     if not dips:
         return list(spaces)
     lo, hi = min(dips, key=lambda w: w['excess'])['range']

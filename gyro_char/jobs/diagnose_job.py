@@ -292,8 +292,7 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
 def summary(channel: str, out: dict) -> str:
     lines = [f'{channel}: baseline gap {out["baseline_gap"]:.2f} (sim vs itself: '
              f'{out["null_gap"]["mean"]:.2f}, 95 % {out["null_gap"]["q95"]:.2f})']
-    if out.get('verdict'):
-        lines.append(f'  verdict: {out["verdict"]["code"]}: {out["verdict"]["text"]}')
+    lines.append(f'  verdict: {out["verdict"]["code"]}: {out["verdict"]["text"]}')
     for w in out['where'][:4]:
         lines.append(f'  gap in {w["observable"]} over {w["range"][0]:.4g}-{w["range"][1]:.4g} '
                      f'{w["range_unit"]}: {w["excess"]:+.1f} sigma')
@@ -320,10 +319,10 @@ def tidy(per_channel: dict) -> List[dict]:
     rows = []
     for ch, out in per_channel.items():
         chosen = ', '.join(out['selected_effects']) or 'none'
-        code = out.get('verdict', {}).get('code', 'n/a')
         rows += [measurement(ch, 'baseline_gap', out['baseline_gap'], '1'),
                  measurement(ch, 'final_gap', out['final_gap'], '1',
-                             message=f'verdict: {code}; selected effects: {chosen}'),
+                             message=f'verdict: {out["verdict"]["code"]}; '
+                                     f'selected effects: {chosen}'),
                  measurement(ch, 'null_gap_q95', out['null_gap']['q95'], '1'),
                  measurement(ch, 'effects_selected', len(out['selected_effects']), '1')]
     return rows
