@@ -1,7 +1,7 @@
 """The static closed forms against the bench simulator's twins and the IEEE formulas."""
 from dataclasses import replace
 
-from gyro_char.diagnosis import expected, spread, static, static_expect
+from gyro_char.diagnosis import expected, spread, static, static_expect, static_spaces
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import evaluate_model, run
 from gyro_char.diagnosis.spectra import model_spectrum
@@ -295,7 +295,7 @@ def test_a_thermal_pulse_mid_record_is_named_with_its_rise_and_onset():
 
 def test_a_pulse_is_searched_where_an_excursion_stands_out_not_on_flicker_wander():
     def has_pulse(x):
-        space = static.static_spaces(BASE, x, ['temperature_drift'])[0]
+        space = static_spaces.static_spaces(BASE, x, ['temperature_drift'])[0]
         return any('rise_s' in {p.name for p in sp.params} for sp in space.alternatives)
     n = 2 ** 17
     rng = np.random.default_rng(8)
@@ -312,7 +312,7 @@ def test_an_onset_is_searched_where_a_step_stands_out_not_on_random_walk_wander(
     # A random walk's largest wander, fitted as a near-step from the change point, once took
     # the warm-up's name from the walk; a real step stands out of the wander's own changes.
     def has_onset(x):
-        space = static.static_spaces(BASE, x, ['temperature_drift'])[0]
+        space = static_spaces.static_spaces(BASE, x, ['temperature_drift'])[0]
         return any({p.name for p in sp.params} == {'amplitude', 'tau_s', 't0_s'}
                    for sp in space.alternatives)
     n = 2 ** 17

@@ -30,11 +30,11 @@ class Param:
     refinement); ``sign`` = -1 searches the magnitude of a negative parameter. A ``choice`` is
     a whole-number structural parameter (a filter's number of stages, a process's order) that
     changes what the other parameters mean: they are fitted anew for each of its values.
-    ``off_at``: 'hi' or 'lo', that bound means "absent" and is stored as 0 (a corner frequency
-    at or above where it could show; a gyro lag at its shortest, which a long record would
-    still see as a correlation of lag / dt); the search starts there, so the effect is first
-    fitted without this part, and a criterion counts the parameter as free only when it is
-    not off.
+    ``off_at``: 'hi' or 'lo', that bound means "absent" and is stored as ``off_value`` (a
+    corner frequency at or above where it could show, stored as 0; a gyro lag at its
+    shortest, which a long record would still see as a correlation of lag / dt; a power law's
+    plain slope, stored as itself); the search starts there, so the effect is first fitted
+    without this part, and a criterion counts the parameter as free only when it is not off.
     """
 
     name: str
@@ -45,6 +45,7 @@ class Param:
     sign: float = 1.0
     choice: bool = False
     off_at: str = ''
+    off_value: float = 0.0
     # Where the search starts (default: the middle of the range); unlike ``EffectSpace.start``
     # still searched. An optional refinement whose bound is as good as absent (a stamp
     # error's correlation time at 0.05 interval: white) starts there, so the main parameter
@@ -57,7 +58,7 @@ class Param:
 
     def is_off(self, value: float) -> bool:
         """Return True if ``value`` is this parameter's "absent" value (``off_at``)."""
-        return bool(self.off_at) and value == 0.0
+        return bool(self.off_at) and value == self.off_value
 
     def to_u(self, v: float) -> float:
         """Return the search variable of value ``v`` (log, linear or prewarped tangent)."""
@@ -69,10 +70,10 @@ class Param:
         return float(np.log(v)) if self.log else float(v)
 
     def from_u(self, u: float) -> float:
-        """Return the value at search variable ``u`` (0 at an ``off_at`` bound, sign applied)."""
+        """Return the value at search variable ``u`` (``off_value`` at an ``off_at`` bound)."""
         if (self.off_at == 'hi' and u >= self.to_u(self.hi) - 1e-12
                 or self.off_at == 'lo' and u <= self.to_u(self.lo) + 1e-12):
-            return 0.0
+            return self.off_value
         if self.nyquist:
             v = float(2.0 * self.nyquist / np.pi * np.arctan(np.exp(u)))
         else:
@@ -140,11 +141,11 @@ class GapObjective:
 
 
 def _start_value(p: Param) -> float:
-    """Where the search of ``p`` starts: ``init``, 0 if it can be absent, else mid-range."""
+    """Where the search of ``p`` starts: ``init``, absent if it can be, else mid-range."""
     if p.init is not None:
         return p.init
     if p.off_at:
-        return 0.0
+        return p.off_value
     return p.from_u(0.5 * (p.to_u(p.lo) + p.to_u(p.hi)))
 
 

@@ -69,18 +69,29 @@ def _resonance(sigma: float, freq_hz: float, q: float, dt: float) -> Callable:
     return psd
 
 
-def _flicker(b: float, corner_hz: float, dt: float) -> Callable:
+def _power_law(coef2: float, alpha: float, plain: float, pivot_hz: float, dt: float) -> Callable:
+    # Kasdin-Walter 1/f^alpha, coef2 dt (2 sin)^(-plain) at the pivot and (s / s_p)^(plain -
+    # alpha) away from it (sensor.pivot_scale): the plain term's own form when alpha = plain.
+    if alpha == plain == 1.0:
+        return lambda s2: coef2 * dt / (2.0 * np.sqrt(s2))
+    if alpha == plain == 2.0:
+        return lambda s2: coef2 * dt / (4.0 * s2)
+    sp2 = float(np.sin(np.pi * pivot_hz * dt)) ** 2
+    return lambda s2: coef2 * dt * (4.0 * sp2) ** (-0.5 * plain) * (s2 / sp2) ** (-0.5 * alpha)
+
+
+def _flicker(b: float, corner_hz: float, dt: float, alpha: float = 1.0,
+             pivot_hz: float = 0.0) -> Callable:
     # Kasdin-Walter 1/f; with an upper corner times the half-order lowpass of noise_gen.flicker,
-    # (1 - c) / |1 - c e^(-i w)|, c = exp(-2 pi corner dt): 1/f^2 above the corner.
-    def one_over_f(s2):
-        return b * b * dt / (2.0 * np.sqrt(s2))
+    # ((1 - c) / |1 - c e^(-i w)|)^alpha, c = exp(-2 pi corner dt): 1/f^2 above the corner.
+    one_over_f = _power_law(b * b, alpha, 1.0, pivot_hz, dt)
     if not corner_hz:
         return one_over_f
     c = float(np.exp(-2.0 * np.pi * corner_hz * dt))
 
     def psd(s2):
         den = np.sqrt((1.0 - c) ** 2 + 4.0 * c * s2)
-        return one_over_f(s2) * (1.0 - c) / den
+        return one_over_f(s2) * ((1.0 - c) / den) ** alpha
     return psd
 
 
@@ -91,10 +102,11 @@ def internal_psd(name: str, p: dict, dt_i: float) -> Optional[Callable]:
     The callable takes s2 = sin^2(pi f dt_i) (floored at 1e-300), not f.
     """
     if name == 'bias_instability':
-        return _flicker(p['B'], p.get('corner_hz', 0.0), dt_i)
+        return _flicker(p['B'], p.get('corner_hz', 0.0), dt_i, p.get('alpha', 1.0),
+                        p.get('pivot_hz', 0.0))
     if name == 'rate_random_walk':
-        k = p['K']
-        return lambda s2: k * k * dt_i * dt_i / (4.0 * s2)
+        return _power_law(p['K'] * p['K'] * dt_i, p.get('alpha', 2.0), 2.0, p.get('pivot_hz', 0.0),
+                          dt_i)
     if name == 'gauss_markov':
         return _ar1(p['sigma'], p['tau_s'], dt_i, int(p.get('order', 1.0)))
     if name == 'resonance':

@@ -1,5 +1,5 @@
 """
-The static kind of the diagnosis: baseline fit, simulated twins, candidate effect spaces.
+The static kind of the diagnosis: baseline fit, simulated twins, the problem to search.
 
 Baseline = the paper's static gyro model (docs/method.md, docs/design.md): white rate noise N,
 constant bias, linear bias drift, output quantization dH. Its parameters come from the real
@@ -13,17 +13,14 @@ A twin of a record of ``n`` samples at ``dt`` comes from the bench simulator
 (``gyro_char.sim.effects``) added in order, restricted to the record's channel.
 """
 from dataclasses import asdict, dataclass, replace
-from typing import List, Optional, Sequence
+from typing import Optional, Sequence
 
 from gyro_char.diagnosis import observables as obs
-from gyro_char.diagnosis.band_kurtosis import steady_envelope
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
-from gyro_char.diagnosis.holds import Holds, repeat_excess, repeat_runs, REPEAT_Z
-from gyro_char.diagnosis.spectra import model_spectrum
-from gyro_char.diagnosis.starts import markov_start
-from gyro_char.diagnosis.static_bands import (
-    resonance_space, vibration_space, with_gap_band, with_notch_band)
+from gyro_char.diagnosis.holds import Holds
+from gyro_char.diagnosis.static_bands import with_gap_band, with_notch_band
+from gyro_char.diagnosis.static_spaces import STATIC_EFFECTS, static_spaces
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
 from gyro_char.errors import InputError
 from gyro_char.sim import simulator
@@ -33,22 +30,9 @@ import numpy as np
 
 # Effects a static record can reveal. (scale-factor, cross-axis, g-sensitivity, time delay and
 # encoder effects need motion or an encoder; a static record cannot tell them from bias.)
-STATIC_EFFECTS = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gauss_markov',
-                  'quantization', 'temperature_drift', 'vibration', 'resonance', 'stale_samples')
 TAU_REF = 1.0  # s, where N is read off the Allan curve
 NUISANCE = 'baseline_white_noise'  # pseudo-effect: scale on the baseline N, tuned per model
 PRESET = 'adis16405'  # only its structure is used: every number that matters is overridden
-# Runs of holds are searched where this share of the exact repeats come two or more in a row;
-# their mean length up to RUN_MAX samples.
-RUN_SHARE = 0.5
-RUN_MAX = 2000.0
-# Every hold form repeats its held share of samples exactly, so where the record's excess of
-# exact repeats is measured, the held share is searched within this factor of it (or within
-# REPEAT_Z standard errors, whichever is wider).
-SHARE_SLACK = 1.5
-# The output-rate low-pass's corner, in cycles per sample: from 2 % of the rate (below, it is
-# a strong smoother the averages or a Gauss-Markov process describe) to just under Nyquist.
-DLPF_LO, DLPF_HI = 0.02, 0.4995
 
 
 @dataclass
@@ -154,184 +138,6 @@ def calibrate_n(base: StaticBaseline, x: np.ndarray, channel: str,
     sims = [white_level(simulate_twin(base, x.size, [], seed + k, channel), base.dt)
             for k in range(repeats)]
     return replace(base, N=base.N * float(np.sqrt(real / np.mean(sims))))
-
-
-# How far (in robust sds of the record's 1/64-length moving average) its largest excursion
-# must stand out for a pulse to be searched. Noise alone reached 2.0-4.7 on 28 records of 2 h
-# (white, flicker, random walks, Gauss-Markov); strong transients 16-20: a pulse searched on
-# wander fitted flicker's edge level as well as flicker did (both then left unnamed).
-PULSE_Z = 6.0
-# Likewise for a transient that starts mid-record, on the moving average's change over one
-# window (the mean after minus the mean before): noise and random walks of every shape seen
-# reached 2.0-5.0 on 90 records of 2 h, a draught through a 150 s lag 6.9-7.5. Searched on
-# a random walk, the onset fitted its largest wander as a near-step and took its name.
-STEP_Z = 6.0
-
-
-def standout(v: np.ndarray):
-    """Return the index of ``v``'s largest deviation from its median, in robust sds."""
-    dev = v - np.median(v)
-    j = int(np.argmax(np.abs(dev)))
-    spread = 1.4826 * float(np.median(np.abs(dev)))
-    return j, (abs(dev[j]) / spread if spread > 0.0 else np.inf), (1.0 if dev[j] >= 0 else -1.0)
-
-
-def static_spaces(base: StaticBaseline, x: np.ndarray,
-                  names: Sequence[str] = STATIC_EFFECTS) -> List[EffectSpace]:
-    """
-    Search spaces scaled to the record: each effect from invisible to dominant.
-
-    Scales: the white noise's Allan deviation at the longest analysed τ (``sig_long``) sets
-    where flicker and random walks become visible; the sample time and the record length bound
-    correlation times; the per-sample noise sets tone and transient amplitudes.
-    """
-    n, dt = x.size, base.dt
-    length = n * dt
-    tau_max = obs.octave_m(n)[-1] * dt
-    sig_long = base.N / np.sqrt(tau_max)
-    sig_sample = base.N / np.sqrt(dt)
-    # The most prominent narrow peak, however weak: if a tone is there at all, that is where.
-    psd = obs.welch_psd(x, dt)
-    tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1, psd=psd)
-    f_tone = float(tones[0]) if tones.size else 0.25 / dt
-    df = 1.0 / (obs.welch_segment(n) * dt)
-    lines, levels = obs.narrow_lines(x, dt, psd=psd)
-    y = obs.detrend(x)
-    # A wandering tone only where the peak's band has a steadier envelope than noise: the
-    # form can mimic a mode's band, which only the fourth moment tells apart.
-    wander = bool(tones.size) and steady_envelope(
-        y, dt, f_tone, model_spectrum(base.N, base.lsb, dt, [], bias=base.bias))
-    # Sign of a warm-up transient: early mean against the late mean of the detrended record.
-    warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
-    # A transient that started mid-record: from the record's change point (the extremum of
-    # the detrended cumulative sum), with the sign of the mean before it against after it
-    # (the early-against-late sign reads a step at 40 % of the record backwards: the
-    # detrending line tilts the early part the other way).
-    cum = np.cumsum(y)
-    k = int(np.argmax(np.abs(cum)))
-    # A pulse (a bias sensing dT/dt as a temperature change passes): from the largest
-    # excursion of the record averaged over 1/64 of its length, with its sign. Each is
-    # searched only where it stands out of the average's own wander (``standout``): the onset
-    # where the average's change over one window does (STEP_Z), the pulse where the average
-    # itself does (PULSE_Z).
-    w = max(n // 64, 1)
-    smooth = (cum[w:] - cum[:-w]) / w if n > 2 * w else y
-    stepped = smooth[w:] - smooth[:-w] if smooth.size > w else smooth
-    onset = ((k * dt, 1.0 if cum[k] >= 0.0 else -1.0) if standout(stepped)[1] > STEP_Z
-             else None)
-    j, z, sign = standout(smooth)
-    pulse = ((j + w / 2) * dt, sign) if z > PULSE_Z else None
-    k_long = sig_long / np.sqrt(tau_max)
-    # Upper bounds from the record itself as well: on a long record a strong random walk or
-    # flicker floor can sit far above 30x the white noise's Allan deviation at the longest tau.
-    adev_long = float(obs.overlapping_adev(y, np.array([obs.octave_m(n)[-1]]))[0])
-    b_hi = max(30.0 * sig_long, 3.0 * adev_long / 0.664)
-    k_hi = max(30.0 * k_long, 3.0 * adev_long * np.sqrt(3.0 / tau_max))
-    gm_sigma = (0.1 * sig_long, max(2.0 * sig_sample, 3.0 * adev_long))
-    # A correlation time whose Allan turnover (~1.9 tc) lies beyond the longest analysed tau
-    # cannot be told from a random walk there: the simpler walk takes it.
-    gm_tau = (3 * dt, tau_max / 2)
-    gm_start = markov_start(y, dt, base.N, *gm_tau, *gm_sigma)
-    spaces = {
-        # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
-        # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline. Or the
-        # output-rate Butterworth low-pass (a DLPF) of order 1 or 2: the averages, decimated,
-        # make whole steps of correlation, a gentle roll-off below Nyquist is the DLPF's.
-        'internal_lowpass': EffectSpace('internal_lowpass', [
-            Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
-            fixed={'decimation': 8.0}, alternatives=(EffectSpace('internal_lowpass', [
-                Param('corner_hz', DLPF_LO / dt, DLPF_HI / dt, nyquist=0.5 / dt),
-                Param('order', 1, 2, integer=True, choice=True)],
-                fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),), refit_all=True),
-        # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
-        # output Nyquist frequency, means no corner): B first without a corner, then the
-        # corner, then both again (a corner moves the best B; refits near it: one pass). The
-        # corner's lower bound keeps 1.5 decades of 1/f in the record (below, the process is a
-        # rate random walk).
-        'bias_instability': EffectSpace('bias_instability', [
-            Param('B', 0.1 * sig_long, b_hi),
-            Param('corner_hz', min(30.0 / length, 0.05 / dt), 0.5 / dt, off_at='hi')],
-            passes=2),
-        'rate_random_walk': EffectSpace('rate_random_walk', [
-            Param('K', 0.1 * k_long, k_hi)]),
-        # Started where the record's Allan excess puts a first-order process (``starts``).
-        'gauss_markov': EffectSpace('gauss_markov', [
-            Param('sigma', *gm_sigma, init=gm_start[0] if gm_start else None),
-            Param('tau_s', *gm_tau, init=gm_start[1] if gm_start else None),
-            Param('order', 1, 2, integer=True, choice=True)], passes=2),
-        # Plain (angle error correlated when the step is coarse) or dithered (white error).
-        'quantization': EffectSpace('quantization', [
-            Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt)),
-            Param('dither', 0, 1, integer=True, choice=True)]),
-        'temperature_drift': warm_up_space(sig_long, sig_sample, length, warm_sign, onset,
-                                           pulse),
-        # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
-        # line between bins spreads its power differently from one on a bin). Where the PSD
-        # shows a comb of narrow lines, a comb about its strongest line is the alternative.
-        'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
-                                     lines, levels, wander=wander),
-        'resonance': resonance_space(sig_sample, f_tone, dt, obs.broad_peak(psd)),
-    }
-    # Holds: searched where the record repeats samples exactly beyond what its rounding does
-    # (``holds.repeat_excess``; everywhere if the step is too coarse to tell). Where the
-    # excess is measured, p lies within SHARE_SLACK of it (a hold model must repeat as many
-    # samples as the record does: a smoother whose spectrum a share of 0.2 mimics, with 0.5 %
-    # of repeats, is no hold), started there; else p from a lag-1 correlation about its
-    # standard error 1 / sqrt(n) up to one sample in two (below one in two if never two in a
-    # row), started at the record's lag-1 correlation (p, on white noise; the coarse grid
-    # steps by a factor 4).
-    excess, excess_se = repeat_excess(x, base.lsb)
-    p_lo, p_hi = 1.0 / np.sqrt(n), 0.45
-    if excess_se > 0.0:
-        start = excess
-        p_lo = max(p_lo, min(excess / SHARE_SLACK, excess - REPEAT_Z * excess_se))
-        p_hi = min(p_hi, max(excess * SHARE_SLACK, excess + REPEAT_Z * excess_se))
-    else:
-        start = float(np.dot(y[:-1], y[1:]) / np.dot(y, y))
-    # Not searched where the excess is within noise, nor where it exceeds every share searched
-    # (more repeats than one sample in two: a coarse lattice, not holds).
-    if (not excess_se > 0.0 or excess > REPEAT_Z * excess_se) and p_lo < p_hi:
-        p_param = Param('p', p_lo, p_hi, init=min(max(start, p_lo), p_hi))
-        spaces['stale_samples'] = EffectSpace('stale_samples', [
-            p_param, Param('isolated', 0, 1, integer=True, choice=True)])
-        # Runs of holds (a frozen register): where most exact repeats come in runs of two or
-        # more, an alternative start at their mean length.
-        length, share = repeat_runs(x, base.lsb)
-        if length >= 2.0 and share > RUN_SHARE:
-            spaces['stale_samples'].alternatives = (EffectSpace('stale_samples', [
-                p_param, Param('run', 1.5, RUN_MAX, init=min(length, RUN_MAX))]),)
-    return [spaces[k] for k in names if k in spaces]
-
-
-def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
-                  onset=None, pulse=None) -> EffectSpace:
-    """
-    ``temperature_drift``'s search: a warm-up from power-on, one that started later, a pulse.
-
-    The power-on form (amplitude, lag); and, as alternative starts, ``onset`` = (the record's
-    change point, the sign there): a transient from ``t0_s`` (a draught, a heater switching
-    mid-record), and ``pulse`` = (time of the largest excursion, its sign): a pulse
-    (``rise_s``) rising before it. Each alternative fits amplitude and lags around its start,
-    then the onset; the best of them is kept.
-    """
-    lag = Param('tau_s', length / 200, length / 2)
-    power_on = EffectSpace('temperature_drift', [
-        Param('amplitude', amp_lo, amp_hi, sign=warm_sign), lag])
-    others = []
-    t0 = Param('t0_s', 0.01 * length, 0.9 * length, log=False, off_at='lo',
-               init=onset[0] if onset else 0.5 * length)
-    if onset is not None and t0.lo < onset[0] < t0.hi:
-        others.append(EffectSpace('temperature_drift', [
-            Param('amplitude', amp_lo, amp_hi, sign=onset[1]), lag, t0]))
-    if pulse is not None:
-        at, sign = pulse
-        start = min(max(at - length / 50, t0.lo), t0.hi)
-        others.append(EffectSpace('temperature_drift', [
-            Param('amplitude', amp_lo, amp_hi, sign=sign),
-            Param('tau_s', length / 400, length / 4),
-            Param('rise_s', length / 4000, length / 20),
-            replace(t0, init=start)]))
-    return replace(power_on, alternatives=tuple(others))
 
 
 def checked_records(records: Sequence, dt: float, max_samples: Optional[int] = None):

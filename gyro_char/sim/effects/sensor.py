@@ -216,12 +216,55 @@ class _NoiseTerm(Effect):
         _add_truth_term(truth, axis_rows(self), self.term, self.params[self.term])
 
 
+def pivot_scale(alpha: float, plain: float, pivot_hz: float, dt: float) -> float:
+    """
+    Innovation scale of a 1/f^alpha process that equals the plain 1/f^plain one at ``pivot_hz``.
+
+    The Kasdin-Walter filter (1 - z^-1)^(-alpha/2) of unit innovations has the two-sided PSD
+    dt (2 sin(pi f dt))^(-alpha); scaling it by (2 sin(pi f_p dt))^((alpha - plain) / 2) makes
+    it cross the plain process's PSD at f_p, so the coefficient keeps its meaning there.
+    """
+    return float((2.0 * np.sin(np.pi * pivot_hz * dt)) ** (0.5 * (alpha - plain)))
+
+
+class _PowerLawTerm(_NoiseTerm):
+    """A noise term whose PSD slope ``alpha`` may depart from its IEEE value ``plain``."""
+
+    plain = 0.0
+
+    def check(self):
+        super().check()
+        if not 0.0 < self.alpha < 3.0 or not self.pivot_hz > 0.0:
+            raise InputError(f'{self.name}: alpha must lie in (0, 3) and pivot_hz be > 0')
+
+    def fractional(self) -> bool:
+        """Return True if the slope departs from the plain IEEE term's."""
+        return self.alpha != self.plain
+
+    def describe(self):
+        out = Effect.describe(self)
+        if not self.fractional():        # as before the slope was a parameter
+            del out['params']['alpha'], out['params']['pivot_hz']
+        return out
+
+    def update_truth(self, ctx, truth):
+        # Only the plain slope is an IEEE term; a fractional one has no coefficient in the model.
+        if not self.fractional():
+            super().update_truth(ctx, truth)
+
+
+PIVOT_PARAMS = {
+    'pivot_hz': (0.01, 'Hz', 'where a fractional slope crosses the plain one (coefficient '
+                 'defined there)')}
+
+
 @register
-class BiasInstability(_NoiseTerm):
-    """Flicker (1/f) bias noise."""
+class BiasInstability(_PowerLawTerm):
+    """Flicker (1/f) bias noise, optionally of a fractional slope 1/f^alpha."""
 
     name = 'bias_instability'
     term = 'B'
+    plain = 1.0
     summary = 'flicker (1/f) bias noise: the flat Allan floor 0.664 B'
     physics = ('1/f rate noise (Kasdin-Walter fractional integration, noise_gen): PSD '
                'B^2 / (pi f), Allan variance 2 ln2 / pi B^2 (flat floor 0.664 B). '
@@ -231,10 +274,14 @@ class BiasInstability(_NoiseTerm):
                'lowpass (1 - b)^(1/2) (1 - b z^-1)^(-1/2), b = exp(-2 pi corner_hz dt), at '
                'the internal rate: PSD B^2 / (pi f) / sqrt(1 + (f / corner_hz)^2) in the '
                'continuous limit, 1/f below the corner (floor 0.664 B at tau >> '
-               '1 / corner_hz), 1/f^2 above it.')
+               '1 / corner_hz), 1/f^2 above it. alpha != 1: 1/f^alpha noise (an Allan slope '
+               '(alpha - 1) / 2 instead of a floor, as a spread of trap energies that is '
+               'not flat gives), equal to the 1/f one of coefficient B at pivot_hz (the '
+               'corner then acts as (1 - b)^(alpha/2) (1 - b z^-1)^(-alpha/2)).')
     PARAMS = {'B': (10.0 * DEG / 3600.0, 'rad/s', 'IEEE bias-instability coefficient'),
               'axis': axis_param(),
-              'corner_hz': (0.0, 'Hz', 'upper corner: 1/f below, 1/f^2 above (0: none)')}
+              'corner_hz': (0.0, 'Hz', 'upper corner: 1/f below, 1/f^2 above (0: none)'),
+              'alpha': (1.0, '', 'PSD slope: 1/f^alpha (1: flicker)'), **PIVOT_PARAMS}
 
     def check(self):
         super().check()
@@ -242,22 +289,36 @@ class BiasInstability(_NoiseTerm):
             raise InputError('bias_instability: corner_hz must be >= 0')
 
     def series(self, n: int, ctx, rng) -> np.ndarray:
-        if not self.corner_hz:
+        if not self.corner_hz and not self.fractional():
             return super().series(n, ctx, rng)   # 1/f up to Nyquist, as always
-        return self.B * noise_gen.flicker(n, rng, corner=self.corner_hz * ctx.dt_internal)
+        dt = ctx.dt_internal
+        return (self.B * pivot_scale(self.alpha, 1.0, self.pivot_hz, dt)
+                * noise_gen.flicker(n, rng, alpha=self.alpha, corner=self.corner_hz * dt))
 
 
 @register
-class RateRandomWalk(_NoiseTerm):
-    """Random walk of the rate (integrated white noise)."""
+class RateRandomWalk(_PowerLawTerm):
+    """Random walk of the rate (integrated white noise), optionally of a fractional slope."""
 
     name = 'rate_random_walk'
     term = 'K'
+    plain = 2.0
     summary = 'rate random walk: Allan slope +1/2, sigma^2 = K^2 tau / 3'
     physics = ('Integrated white rate-acceleration noise: PSD K^2 / (2 pi f)^2, Allan '
-               'variance K^2 tau / 3.')
+               'variance K^2 tau / 3. alpha != 2: a 1/f^alpha walk (fractional Brownian '
+               'motion of Hurst exponent (alpha - 1) / 2 for 1 < alpha < 3: an '
+               'anti-persistent creep below 2, a persistent one above), Allan slope '
+               '(alpha - 1) / 2, equal to the plain walk of coefficient K at pivot_hz.')
     PARAMS = {'K': (1.0 * DEG / 3600.0, 'rad/s/sqrt(s)', 'IEEE rate-random-walk coefficient'),
-              'axis': axis_param()}
+              'axis': axis_param(),
+              'alpha': (2.0, '', 'PSD slope: 1/f^alpha (2: random walk)'), **PIVOT_PARAMS}
+
+    def series(self, n: int, ctx, rng) -> np.ndarray:
+        if not self.fractional():
+            return super().series(n, ctx, rng)
+        dt = ctx.dt_internal
+        return (self.K * np.sqrt(dt) * pivot_scale(self.alpha, 2.0, self.pivot_hz, dt)
+                * noise_gen.flicker(n, rng, alpha=self.alpha))
 
 
 @register
