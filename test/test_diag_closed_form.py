@@ -31,6 +31,11 @@ CASES = {
     'gauss_markov_slow': [('gauss_markov', {'sigma': 2e-2, 'tau_s': 30.0, 'order': 1.0})],
     'bias_instability_corner': [('bias_instability', {'B': 1e-3, 'corner_hz': 0.5}), LOWPASS],
     'rate_random_walk': [('rate_random_walk', {'K': 3e-5})],
+    # Power laws off their IEEE slope (test_diag_power_law.py).
+    'rate_random_walk_fractional': [('rate_random_walk', {'K': 5e-3, 'alpha': 1.6,
+                                                          'pivot_hz': 0.01})],
+    'bias_instability_fractional': [('bias_instability', {'B': 5e-3, 'alpha': 1.4,
+                                                          'pivot_hz': 0.01})],
     'gauss_markov': [('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.2, 'order': 1.0})],
     'gauss_markov_2': [('gauss_markov', {'sigma': 3e-3, 'tau_s': 0.05, 'order': 2.0})],
     'quantization': [('quantization', {'step_rad': 2e-4, 'dither': 1.0})],
