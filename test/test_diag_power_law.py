@@ -29,8 +29,9 @@ def test_closed_form_allan_equals_the_generators_exact_avar(name, alpha, corner)
     # (1 - b)^(alpha/2) b^k h_k), scaled by pivot_scale: independent of the PSD form.
     n, pivot = 2 ** 16, 0.003
     plain, key, coef = (1.0, 'B', 5e-5) if name == 'bias_instability' else (2.0, 'K', 2e-5)
-    params = {key: coef, 'alpha': alpha, 'pivot_hz': pivot, **({'corner_hz': corner}
-                                                                 if corner else {})}
+    params = {key: coef, 'alpha': alpha, 'pivot_hz': pivot}
+    if corner:
+        params['corner_hz'] = corner
     g = expected.grids(n, DT)
     got = expected.avar(model_spectrum(0.0, 0.0, DT, [(name, params)]), g)[:10]
     scale = coef * pivot_scale(alpha, plain, pivot, DT) * (np.sqrt(DT) if plain == 2.0 else 1.0)

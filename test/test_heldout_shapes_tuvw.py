@@ -1,13 +1,13 @@
-# Held-out sets T, U, V, W and X (bench/validate_diagnosis_heldout_{t,u,v,w,x}.py, static
+# Held-out sets T, U, V, W, X and Y (bench/validate_diagnosis_heldout_{t,u,v,w,x,y}.py, static
 # only): the generators do what their docstrings claim, and the static harness reaches them by
-# --held-out t / u / v / w / x. THE GENERATORS only, never the diagnosis.
+# --held-out t / u / v / w / x / y. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES, white
 import numpy as np
 import pytest
 from scipy import signal
 
-SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuvwx'}
+SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuvwxy'}
 SHAPES = {k: m.shapes(DT, SIG, N_ARW) for k, m in SETS.items()}
 
 
@@ -103,3 +103,23 @@ def test_x_failed_checks_hold_negative_words_far_more_often():
     eps = levels[1]['eps']
     assert np.mean(held[negative]) > 10 * eps and np.mean(held[~negative]) < 5 * eps
     assert np.mean(held) == pytest.approx(SETS['x'].crc_share(eps, SIG), rel=0.05)
+
+
+def test_y_ping_pong_holds_fall_on_one_parity_only():
+    fn, levels = SHAPES['y']['stale_samples']
+    x = white(200000, 11)
+    y = fn(x.copy(), rng(11), **levels[1])
+    held = np.flatnonzero(y != x)
+    assert held.size > 1000 and np.unique(held % 2).size == 1
+    assert np.all(y[held] == x[held - 1])
+    assert held.size / x.size == pytest.approx(levels[1]['p'] / 2, rel=0.1)
+
+
+def test_y_pulled_fan_is_a_one_sided_comb_below_the_compressor():
+    fn, levels = SHAPES['y']['vibration']
+    y = fn(np.zeros(2 ** 18), rng(12), **levels[1])
+    f = np.fft.rfftfreq(y.size, DT)
+    p = np.abs(np.fft.rfft(y)) ** 2
+    share = [p[np.abs(f - hz) < 0.05].sum() / p.sum() for hz in (26.30, 26.06, 25.82)]
+    assert share == pytest.approx([0.25, 0.56, 0.14], abs=0.03)
+    assert p[f > 26.42].sum() < 1e-3 * p.sum()
