@@ -6,18 +6,9 @@ from gyro_char.sim import noise_gen
 from gyro_char.sim.effects import EFFECTS
 import numpy as np
 import pytest
-from scipy import signal
 
 DT = 0.01
 BASE = static.StaticBaseline(N=7e-4, bias=0.0, drift=0.0, lsb=0.0, dt=DT)
-
-
-def _exact_avar(c: np.ndarray, m: int) -> float:
-    # Allan variance of unit innovations through the causal filter c: the estimator is the
-    # filter (C_j - 2 C_(j-m) + C_(j-2m)) / (sqrt(2) m) on the innovations, C = cumsum(c).
-    big = np.concatenate([np.zeros(2 * m + 1), np.cumsum(c)])
-    g = big[2 * m:] - 2.0 * big[m:-m] + big[:-2 * m]
-    return float(np.dot(g, g) / (2.0 * m * m))
 
 
 def test_default_is_the_unbounded_flicker_bit_for_bit():
@@ -36,24 +27,8 @@ def test_default_is_the_unbounded_flicker_bit_for_bit():
         EFFECTS['bias_instability'](B=1e-4, corner_hz=-1.0).check()
 
 
-@pytest.mark.parametrize('corner_hz', [0.05, 2.0])
-def test_closed_form_allan_equals_the_generators_exact_avar(corner_hz):
-    # Independent of the PSD: the generator's own impulse response (h * (1-b)^(1/2) b^k h).
-    n, b_coef = 2 ** 16, 5e-5
-    g = expected.grids(n, DT)
-    spec = model_spectrum(0.0, 0.0, DT, [('bias_instability', {'B': b_coef,
-                                                               'corner_hz': corner_hz})])
-    got = expected.avar(spec, g)[:10]
-    c_pole = np.exp(-2.0 * np.pi * corner_hz * DT)
-    want = []
-    for m in g.m[:10]:
-        length = 2000 * int(m)
-        k = np.arange(1, length, dtype=np.float64)
-        h = np.concatenate([[1.0], np.cumprod((k - 0.5) / k)])
-        band = np.sqrt(1.0 - c_pole) * c_pole ** np.arange(length) * h
-        c = signal.fftconvolve(h, band)[:length]
-        want.append(b_coef ** 2 * _exact_avar(c, int(m)))
-    np.testing.assert_allclose(got, want, rtol=5e-3)
+# The closed-form Allan variance against the generator's exact discrete AVAR, with and without
+# a corner: test_diag_power_law.py (every slope).
 
 
 def test_corner_keeps_the_floor_at_long_tau_and_bends_the_spectrum_above_it():

@@ -15,18 +15,22 @@ BASE = static.StaticBaseline(N=7e-4, bias=0.0, drift=0.0, lsb=0.0, dt=DT)
 
 
 def _exact_avar(c: np.ndarray, m: int) -> float:
-    # Allan variance of unit innovations through the causal filter c (as in the corner test).
+    # Allan variance of unit innovations through the causal filter c: the estimator is the
+    # filter (C_j - 2 C_(j-m) + C_(j-2m)) / (sqrt(2) m) on the innovations, C = cumsum(c).
     big = np.concatenate([np.zeros(2 * m + 1), np.cumsum(c)])
     g = big[2 * m:] - 2.0 * big[m:-m] + big[:-2 * m]
     return float(np.dot(g, g) / (2.0 * m * m))
 
 
-@pytest.mark.parametrize('name,alpha,corner', [('bias_instability', 1.3, 0.0),
+@pytest.mark.parametrize('name,alpha,corner', [('bias_instability', 1.0, 0.05),
+                                               ('bias_instability', 1.0, 2.0),
+                                               ('bias_instability', 1.3, 0.0),
                                                ('bias_instability', 1.3, 0.5),
                                                ('rate_random_walk', 1.7, 0.0)])
 def test_closed_form_allan_equals_the_generators_exact_avar(name, alpha, corner):
     # From the generator's own impulse response, (1 - z^-1)^(-alpha/2) (times the corner's
-    # (1 - b)^(alpha/2) b^k h_k), scaled by pivot_scale: independent of the PSD form.
+    # (1 - b)^(alpha/2) b^k h_k), scaled by pivot_scale: independent of the PSD form. The
+    # plain flicker with a corner (alpha 1) too.
     n, pivot = 2 ** 16, 0.003
     plain, key, coef = (1.0, 'B', 5e-5) if name == 'bias_instability' else (2.0, 'K', 2e-5)
     params = {key: coef, 'alpha': alpha, 'pivot_hz': pivot}
