@@ -82,8 +82,9 @@ def _power_law(coef2: float, alpha: float, plain: float, pivot_hz: float, dt: fl
 
 def _flicker(b: float, corner_hz: float, dt: float, alpha: float = 1.0,
              pivot_hz: float = 0.0) -> Callable:
-    # Kasdin-Walter 1/f; with an upper corner times the half-order lowpass of noise_gen.flicker,
-    # ((1 - c) / |1 - c e^(-i w)|)^alpha, c = exp(-2 pi corner dt): 1/f^2 above the corner.
+    # Kasdin-Walter 1/f^alpha; with an upper corner times the lowpass of noise_gen.flicker,
+    # ((1 - c) / |1 - c e^(-i w)|)^alpha, c = exp(-2 pi corner dt): 1/f^(2 alpha) above the
+    # corner (1/f^2 for the plain flicker).
     one_over_f = _power_law(b * b, alpha, 1.0, pivot_hz, dt)
     if not corner_hz:
         return one_over_f

@@ -243,7 +243,7 @@ class _PowerLawTerm(_NoiseTerm):
 
     def describe(self):
         out = Effect.describe(self)
-        if not self.fractional():        # as before the slope was a parameter
+        if not self.fractional():        # the plain term's description, as it always was
             del out['params']['alpha'], out['params']['pivot_hz']
         return out
 
