@@ -94,3 +94,18 @@ def test_short_gaps_stay_integrated():
     on = _run_online(cfg, sim, t[keep], rate[keep])
     on.estimates()
     assert on.gaps_released == 1
+
+
+def test_a_first_gyro_chunk_of_one_sample_folds():
+    # A node's estimate timer can fire when one gyro sample has arrived: that chunk has no
+    # integration step. Its gap flags were sliced with [-0:] (all of them) and the boolean
+    # index raised, killing swing_kf_node (seen once in the live demo on a loaded machine).
+    on = SwingOnline(5.0)
+    on.add_encoder(np.array([0.0, 0.001]), np.array([0.0, 1e-4]))
+    on.add_imu(np.array([0.0]), np.array([0.01]))
+    e = on.estimates()
+    assert e.samples_gyro == 1 and not np.isfinite(e.scale_factor_error.value)
+    t = np.arange(1, 2000) * 1e-3
+    on.add_imu(t, 0.01 * np.cos(2 * np.pi * t / 5.0))
+    on.add_encoder(t, 0.01 * 5.0 / (2 * np.pi) * np.sin(2 * np.pi * t / 5.0))
+    assert on.estimates().samples_gyro == 2000

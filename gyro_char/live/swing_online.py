@@ -117,7 +117,10 @@ class SwingOnline:
         angle = p_angle + integrate(tt, rr)[1:]
         steps = dt if self._gyro_last is not None else dt[1:]
         # Released gaps carry no increment, so they take no part in the integration's gain.
-        steps = steps[~swing_batch.gap_steps(self._gyr.state, tau)[-steps.size:]]
+        # (The last steps.size flags, by index: a first chunk of one sample has no step, and
+        # [-0:] would be all of them.)
+        gaps = swing_batch.gap_steps(self._gyr.state, tau)
+        steps = steps[~gaps[gaps.size - steps.size:]]
         if steps.size:
             self._gain_sum += trapezoid_gain(steps, self.period_s) * steps.size
             self._gain_steps += steps.size

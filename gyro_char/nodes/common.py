@@ -13,6 +13,7 @@ callback and ``validate`` (the nodes' on-set callback) refuses a value with the 
 from dataclasses import dataclass
 import math
 import sys
+import traceback
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -220,12 +221,25 @@ def spin(node: Any, executor: Any = None) -> None:
     ``rclpy.spin`` calls ``spin_once()`` without a timeout, and Jazzy's EventsExecutor turns
     that (and its own ``spin()``) into a busy loop (measured: ~40 % of a core while idle).
     ``spin_once`` with a timeout sleeps properly, and the loop sees ``STOP`` within 0.2 s.
+    A callback that raises does not end the node: the error is logged (the first three and
+    every hundredth, with the traceback) and the node keeps serving its other callbacks and
+    the next messages. A parameter error and a shutdown still end it.
     """
     executor = executor or make_executor(node.context)
     executor.add_node(node)
+    failures = 0
     try:
         while node.context.ok() and not STOP.is_set():
-            executor.spin_once(timeout_sec=0.2)
+            try:
+                executor.spin_once(timeout_sec=0.2)
+            except (InvalidParameter, ExternalShutdownException):
+                raise
+            except Exception as exc:  # noqa: B902 - any bug in one callback
+                failures += 1
+                if node.context.ok() and (failures <= 3 or failures % 100 == 0):
+                    node.get_logger().error(
+                        f'a callback failed ({failures} so far; the node keeps running): '
+                        f'{exc!r}\n{traceback.format_exc()}')
     finally:
         executor.remove_node(node)
 
