@@ -109,3 +109,34 @@ def test_a_first_gyro_chunk_of_one_sample_folds():
     on.add_imu(t, 0.01 * np.cos(2 * np.pi * t / 5.0))
     on.add_encoder(t, 0.01 * 5.0 / (2 * np.pi) * np.sin(2 * np.pi * t / 5.0))
     assert on.estimates().samples_gyro == 2000
+
+
+@pytest.mark.parametrize('seed', range(6))
+def test_random_chunking_with_bad_samples_never_raises_and_counts_every_sample(seed):
+    # Chunks of 0-3 samples (what a node's drain timer may see), gaps, NaN and stamps that
+    # go backwards, with estimates asked for at random points: every sample is either used
+    # or counted as rejected, and nothing raises.
+    cfg = study_config('mems')
+    sim = simulate_swing(cfg, duration=6.0, seed=seed, channels=('gyro_x',))
+    t, r = sim.imu.t, sim.imu.channels['gyro_x']
+    te, ye = sim.encoder.t, sim.encoder.channels[ENCODER_CHANNEL]
+    rng = np.random.default_rng(seed)
+    on = SwingOnline(cfg.stand.period_s)
+    i = j = fed = 0
+    while i < t.size or j < te.size:
+        k, m = (int(v) for v in rng.integers(0, 4, 2))
+        if rng.random() < 0.05:
+            i += int(rng.integers(1, 200))
+        tt, rr = t[i:i + k].copy(), r[i:i + k].copy()
+        if tt.size and rng.random() < 0.05:
+            rr[0] = np.nan
+        if tt.size and rng.random() < 0.05:
+            tt[-1] = tt[0] - 0.5
+        on.add_imu(tt, rr)
+        fed, i = fed + tt.size, i + k
+        on.add_encoder(te[j:j + m], ye[j:j + m])
+        j += m
+        if rng.random() < 0.02:
+            on.estimates()
+    e = on.estimates()
+    assert e.samples_gyro + on.rejected[1] == fed
