@@ -37,9 +37,15 @@ def test_criterion_counts_each_effects_free_parameters():
     ev2 = Evaluation([('gauss_markov', {}), ('baseline_white_noise', {})], 0.0, [base])
     n = sum(np.size(v) for v in p.reals[0].values())
     assert abs(crit(ev2) - crit(ev0) - 3 * np.log(n)) < 1e-9   # sigma, tau_s, order
-    # A flicker's upper corner counts only when it is on (corner_hz = 0: no corner).
-    for corner, k in ((0.0, 1), (0.5, 2)):
-        ev = Evaluation([('bias_instability', {'B': 1e-4, 'corner_hz': corner})], 0.0, [base])
+    # A flicker's upper corner counts only when it is on (corner_hz = 0: no corner), a power
+    # law's slope only off its plain value (1 for flicker, 2 for the walk).
+    for effect, k in ((('bias_instability', {'B': 1e-4, 'corner_hz': 0.0}), 1),
+                      (('bias_instability', {'B': 1e-4, 'corner_hz': 0.5}), 2),
+                      (('bias_instability', {'B': 1e-4, 'corner_hz': 0.0, 'alpha': 1.0}), 1),
+                      (('bias_instability', {'B': 1e-4, 'corner_hz': 0.0, 'alpha': 1.3}), 2),
+                      (('rate_random_walk', {'K': 1e-5, 'alpha': 2.0}), 1),
+                      (('rate_random_walk', {'K': 1e-5, 'alpha': 1.7}), 2)):
+        ev = Evaluation([effect], 0.0, [base])
         assert abs(crit(ev) - crit(ev0) - k * np.log(n)) < 1e-9
 
 

@@ -1,7 +1,6 @@
 """Power laws off their IEEE slope: bias_instability and rate_random_walk with ``alpha``."""
 import bench_script
-from gyro_char.diagnosis import choice, engine, expected, static, static_expect
-from gyro_char.diagnosis.fit import Evaluation
+from gyro_char.diagnosis import engine, expected, static, static_expect
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.errors import InputError
 from gyro_char.sim.effects import EFFECTS
@@ -76,21 +75,6 @@ def test_the_plain_slope_is_the_old_effect_bit_for_bit():
         for bad in ({'alpha': 0.0}, {'alpha': 3.0}, {'pivot_hz': 0.0}):
             with pytest.raises(InputError):
                 EFFECTS[name](**p, **bad).check()
-
-
-def test_a_slope_counts_as_a_parameter_only_off_its_plain_value():
-    h = bench_script.load('validate_diagnosis')
-    p = static_expect.closed_form_problem([h.make_record([], 8192, seed=5)], h.DT, twins=4,
-                                          seed=6)
-    crit = choice.Criterion(p.reals, p.spaces)
-    base = p.expect(0, [])
-    ev0 = Evaluation([], 0.0, [base])
-    n = sum(np.size(v) for v in p.reals[0].values())
-    for effect, k in ((('bias_instability', {'B': 1e-4, 'corner_hz': 0.0, 'alpha': 1.0}), 1),
-                      (('bias_instability', {'B': 1e-4, 'corner_hz': 0.0, 'alpha': 1.3}), 2),
-                      (('rate_random_walk', {'K': 1e-5, 'alpha': 2.0}), 1),
-                      (('rate_random_walk', {'K': 1e-5, 'alpha': 1.7}), 2)):
-        assert abs(crit(Evaluation([effect], 0.0, [base])) - crit(ev0) - k * np.log(n)) < 1e-9
 
 
 def _fbm_rate(n: int, hurst: float, c: float, rng) -> np.ndarray:

@@ -28,7 +28,8 @@ from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import rounding, wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
-from gyro_char.sim.effects.sensor import output_lowpass_gain2, output_notch_gain2
+from gyro_char.sim.effects.sensor import (DEFAULT_PIVOT_HZ, output_lowpass_gain2,
+                                          output_notch_gain2, pivot_scale)
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines, WANDER_S
 import numpy as np
 
@@ -70,18 +71,18 @@ def _resonance(sigma: float, freq_hz: float, q: float, dt: float) -> Callable:
 
 
 def _power_law(coef2: float, alpha: float, plain: float, pivot_hz: float, dt: float) -> Callable:
-    # Kasdin-Walter 1/f^alpha, coef2 dt (2 sin)^(-plain) at the pivot and (s / s_p)^(plain -
-    # alpha) away from it (sensor.pivot_scale): the plain term's own form when alpha = plain.
+    # Kasdin-Walter 1/f^alpha of innovation variance coef2, scaled as the simulator scales it
+    # (sensor.pivot_scale) to meet the plain term at the pivot: coef2 scale^2 dt (2 sin)^-alpha.
     if alpha == plain == 1.0:
         return lambda s2: coef2 * dt / (2.0 * np.sqrt(s2))
     if alpha == plain == 2.0:
         return lambda s2: coef2 * dt / (4.0 * s2)
-    sp2 = float(np.sin(np.pi * pivot_hz * dt)) ** 2
-    return lambda s2: coef2 * dt * (4.0 * sp2) ** (-0.5 * plain) * (s2 / sp2) ** (-0.5 * alpha)
+    c = coef2 * pivot_scale(alpha, plain, pivot_hz, dt) ** 2 * dt
+    return lambda s2: c * (4.0 * s2) ** (-0.5 * alpha)
 
 
 def _flicker(b: float, corner_hz: float, dt: float, alpha: float = 1.0,
-             pivot_hz: float = 0.0) -> Callable:
+             pivot_hz: float = DEFAULT_PIVOT_HZ) -> Callable:
     # Kasdin-Walter 1/f^alpha; with an upper corner times the lowpass of noise_gen.flicker,
     # ((1 - c) / |1 - c e^(-i w)|)^alpha, c = exp(-2 pi corner dt): 1/f^(2 alpha) above the
     # corner (1/f^2 for the plain flicker).
@@ -104,10 +105,10 @@ def internal_psd(name: str, p: dict, dt_i: float) -> Optional[Callable]:
     """
     if name == 'bias_instability':
         return _flicker(p['B'], p.get('corner_hz', 0.0), dt_i, p.get('alpha', 1.0),
-                        p.get('pivot_hz', 0.0))
+                        p.get('pivot_hz', DEFAULT_PIVOT_HZ))
     if name == 'rate_random_walk':
-        return _power_law(p['K'] * p['K'] * dt_i, p.get('alpha', 2.0), 2.0, p.get('pivot_hz', 0.0),
-                          dt_i)
+        return _power_law(p['K'] * p['K'] * dt_i, p.get('alpha', 2.0), 2.0,
+                          p.get('pivot_hz', DEFAULT_PIVOT_HZ), dt_i)
     if name == 'gauss_markov':
         return _ar1(p['sigma'], p['tau_s'], dt_i, int(p.get('order', 1.0)))
     if name == 'resonance':

@@ -112,6 +112,8 @@ def static_spaces(base, x: np.ndarray,
     # A correlation time whose Allan turnover (~1.9 tc) lies beyond the longest analysed tau
     # cannot be told from a random walk there: the simpler walk takes it.
     gm_tau = (3 * dt, tau_max / 2)
+    # A fractional power law's pivot: near the longest tau, where such a process shows.
+    pivot = 0.5 / tau_max
     gm_start = markov_start(y, dt, base.N, *gm_tau, *gm_sigma)
     spaces = {
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
@@ -130,7 +132,7 @@ def static_spaces(base, x: np.ndarray,
         # corner's lower bound keeps 1.5 decades of 1/f in the record (below, the process is a
         # rate random walk). Each power law may also be steeper (flicker) or shallower (walk)
         # than its IEEE slope, up to halfway to the other's (``SLOPE_SPLIT``), the coefficient
-        # defined at a pivot near the longest tau, where such a process shows; flicker's
+        # defined at ``pivot``; flicker's
         # steeper slope is an alternative to its corner, not an addition (with both, a slope
         # and a corner bend it into a walk's shape as well as a walk).
         'bias_instability': EffectSpace('bias_instability', [
@@ -139,11 +141,11 @@ def static_spaces(base, x: np.ndarray,
             passes=2, alternatives=(EffectSpace('bias_instability', [
                 Param('B', 0.1 * sig_long, b_hi),
                 Param('alpha', 1.0, SLOPE_SPLIT, log=False, off_at='lo', off_value=1.0)],
-                fixed={'corner_hz': 0.0, 'pivot_hz': 0.5 / tau_max}, passes=2),)),
+                fixed={'corner_hz': 0.0, 'pivot_hz': pivot}, passes=2),)),
         'rate_random_walk': EffectSpace('rate_random_walk', [
             Param('K', 0.1 * k_long, k_hi),
             Param('alpha', SLOPE_SPLIT, 2.0, log=False, off_at='hi', off_value=2.0)],
-            fixed={'pivot_hz': 0.5 / tau_max}, passes=2),
+            fixed={'pivot_hz': pivot}, passes=2),
         # Started where the record's Allan excess puts a first-order process (``starts``).
         'gauss_markov': EffectSpace('gauss_markov', [
             Param('sigma', *gm_sigma, init=gm_start[0] if gm_start else None),

@@ -253,9 +253,11 @@ class _PowerLawTerm(_NoiseTerm):
             super().update_truth(ctx, truth)
 
 
+# Where a fractional slope meets the plain term unless said (the closed forms use it too).
+DEFAULT_PIVOT_HZ = 0.01
 PIVOT_PARAMS = {
-    'pivot_hz': (0.01, 'Hz', 'where a fractional slope crosses the plain one (coefficient '
-                 'defined there)')}
+    'pivot_hz': (DEFAULT_PIVOT_HZ, 'Hz',
+                 'where a fractional slope crosses the plain one (coefficient defined there)')}
 
 
 @register
@@ -292,7 +294,7 @@ class BiasInstability(_PowerLawTerm):
         if not self.corner_hz and not self.fractional():
             return super().series(n, ctx, rng)   # 1/f up to Nyquist, as always
         dt = ctx.dt_internal
-        return (self.B * pivot_scale(self.alpha, 1.0, self.pivot_hz, dt)
+        return (self.B * pivot_scale(self.alpha, self.plain, self.pivot_hz, dt)
                 * noise_gen.flicker(n, rng, alpha=self.alpha, corner=self.corner_hz * dt))
 
 
@@ -317,7 +319,7 @@ class RateRandomWalk(_PowerLawTerm):
         if not self.fractional():
             return super().series(n, ctx, rng)
         dt = ctx.dt_internal
-        return (self.K * np.sqrt(dt) * pivot_scale(self.alpha, 2.0, self.pivot_hz, dt)
+        return (self.K * np.sqrt(dt) * pivot_scale(self.alpha, self.plain, self.pivot_hz, dt)
                 * noise_gen.flicker(n, rng, alpha=self.alpha))
 
 
