@@ -131,6 +131,10 @@ def channel_task(task: dict) -> dict:
                              diag.model)
         out['non_gaussian_bands'] = bands
         out.setdefault('warnings', []).extend(band_warnings(bands))
+    lines = narrow(task['records'][0], dt, opts['max_samples'], problem, diag.model)
+    if lines is not None:
+        out['narrow_lines'] = lines
+        out.setdefault('warnings', []).extend(line_warnings(lines))
     if opts['method'] == 'closed-form' and opts['check'] > 0:
         out['posterior_predictive'] = posterior_predictive(problem, diag, opts['check'],
                                                            opts['seed'])
@@ -146,6 +150,24 @@ def non_gaussian(x, dt: float, max_samples: Optional[int], expect, model) -> lis
     from gyro_char.diagnosis.band_kurtosis import non_gaussian_bands
     x = np.asarray(x, dtype=np.float64)[:max_samples or None]
     return non_gaussian_bands(x, dt, expect.spectrum(list(model)))
+
+
+def narrow(x, dt: float, max_samples: Optional[int], problem, model) -> Optional[dict]:
+    """Lines of the analysed record at fine resolution, each marked if the model makes it."""
+    from gyro_char.diagnosis.narrow_lines import narrow_lines
+    from gyro_char.diagnosis.static_expect import StaticExpect
+    x = np.asarray(x, dtype=np.float64)[:max_samples or None]
+    expect = problem.expect or StaticExpect(problem.context, [])
+    return narrow_lines(x, dt, expect.spectrum(list(model)))
+
+
+def line_warnings(scan: dict) -> List[str]:
+    """Say in words which narrow lines the selected model does not make."""
+    return [f'a narrow line at {d["frequency_hz"]:.4f} Hz, {d["excess"]:.2f} x the local noise '
+            f'floor in {scan["resolution_hz"]:.2g} Hz bins (family-wise p {d["p_value"]:.1e}), '
+            "that the selected model does not make: a steady line finer than the gap's tone "
+            'bands resolve (see "narrow_lines")'
+            for d in scan['lines'] if not d.get('in_model', False)]
 
 
 def band_warnings(bands: Sequence[dict]) -> List[str]:

@@ -1,0 +1,138 @@
+"""
+Narrow lines at fine frequency resolution: a check beside the gap.
+
+The gap's ``tone`` block reads Welch segments of at most 2048 samples (0.05 Hz at 100 Hz):
+wide enough bins for wandering tones and modes, with hundreds of segments behind each bin.
+A steady line's excess over the noise in its bin grows as the segment length while the
+bin's scatter falls only as the square root of the number of segments, so a line the tone
+block cannot see stands far out at a finer resolution (a 2 h record: segments of 2^15
+samples, 0.003 Hz, 43 segments).
+
+Test, per bin: the Welch PSD over its running median (``FLOOR_SHARE`` of the bins wide,
+~0.5 Hz: a mode wider than that lifts its own floor and is not a line here). Under Gaussian
+noise a bin is its mean times chi-square / dof with 2 K_eff degrees of freedom (K_eff: the
+overlapping Hann segments' equivalent count) and the running median is that mean times the
+law's median, so the bin's excess r has the tail P(chi2_(2K) > 2 K r med), averaged over
+the floor's own error (the median of the window's bins: log-normal, relative sd
+1.2533 / sqrt(K n_eff), n_eff the window's bins over the Hann neighbours' variance
+inflation 1 + 2 (4/9 + 1/36); 9-point Gauss-Hermite). The family-wise p of a bin is
+1 - (1 - tail)^M over the M bins tested (neighbouring Hann bins correlate, which makes it
+conservative). Bins within half a floor window of either end are
+not tested.
+
+Whether the selected model makes a line is read off the model's own spectrum on the same
+bins: its continuous part at the bin frequencies plus its lines' Hann leakage, over its own
+running median (``model_excess``); a line whose model excess reaches ``MODEL_SHARE`` of the
+record's is the model's. The others are what the gap cannot see.
+"""
+from typing import Optional
+
+from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis.expected import line_bins
+import numpy as np
+from scipy import ndimage, signal, special
+
+MIN_SEGMENTS = 32       # Welch segments at least (50 % overlap)
+MAX_SEGMENT = 2 ** 16   # samples per segment at most
+FLOOR_SHARE = 100       # the floor's running median spans 1/FLOOR_SHARE of the bins
+REPORT_P = 1e-3         # family-wise p below which a bin is reported
+HANN_INFLATION = 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0)   # neighbouring bins' correlation
+MAX_REPORTED = 10       # lines reported at most, smallest p first
+MODEL_SHARE = 0.5       # a model excess this share of the record's makes the line the model's
+
+
+def fine_segment(n: int) -> int:
+    """Longest power-of-two segment with ``MIN_SEGMENTS`` half-overlapping segments in ``n``."""
+    seg = 2 ** int(np.floor(np.log2(max(2 * n // (MIN_SEGMENTS + 1), 2))))
+    return int(min(seg, MAX_SEGMENT))
+
+
+def equivalent_segments(n: int, nps: int) -> float:
+    """K_eff of Welch's half-overlapping Hann segments (their overlap correlates them)."""
+    segs = (n - nps) // (nps // 2) + 1
+    w = signal.get_window('hann', nps)
+    rho = float(np.dot(w[:nps // 2], w[nps // 2:]) / np.dot(w, w))
+    return segs / (1.0 + 2.0 * rho * rho * (segs - 1) / segs)
+
+
+def line_scan(x: np.ndarray, dt: float) -> dict:
+    """
+    Every tested bin's frequency, excess over the floor and family-wise p (module docstring).
+
+    ``x``: rate samples, detrended here. A record too short for ``MIN_SEGMENTS`` segments
+    longer than the tone block's cannot be resolved finer than it: a ValueError says so.
+    """
+    x = obs.detrend(np.asarray(x, dtype=np.float64))
+    nps = fine_segment(x.size)
+    if nps <= obs.welch_segment(x.size):
+        raise ValueError(f'record too short for a finer line scan than the tone block: '
+                         f'{x.size} samples (need >= {(MIN_SEGMENTS + 1) * 2048})')
+    f, p = signal.welch(x, fs=1.0 / dt, nperseg=nps)
+    k = equivalent_segments(x.size, nps)
+    size = max(31, (p.size // FLOOR_SHARE) | 1)
+    floor = ndimage.median_filter(p, size=size, mode='nearest')
+    half = size // 2
+    keep = slice(half, p.size - half)
+    med = float(special.gammaincinv(k, 0.5) / k)
+    excess = p[keep] / np.maximum(floor[keep], 1e-300) * med
+    tail = floor_averaged_tail(excess, k, size)
+    m = excess.size
+    family = -np.expm1(m * np.log1p(-np.minimum(tail, 1.0 - 1e-16)))
+    return {'segment': nps, 'resolution_hz': float(f[1]), 'k_eff': float(k),
+            'tested_hz': [float(f[keep][0]), float(f[keep][-1])], 'bins': int(m),
+            'f': f[keep], 'excess': excess, 'p': family, 'keep': keep, 'size': size}
+
+
+def floor_averaged_tail(excess: np.ndarray, k: float, size: int) -> np.ndarray:
+    """P(bin > excess x floor) for chi-square/dof bins (2k dof), the floor's error averaged."""
+    sd = 1.2533 / np.sqrt(k * size / HANN_INFLATION)
+    x, w = np.polynomial.hermite_e.hermegauss(9)
+    w = w / w.sum()
+    out = np.zeros_like(excess)
+    for xi, wi in zip(x, w):
+        out += wi * special.gammaincc(k, k * excess * np.exp(sd * xi))
+    return out
+
+
+def model_excess(spec, f: np.ndarray, dt: float, nps: int, size: int) -> np.ndarray:
+    """Return the expected Welch PSD of ``spec`` on all bins ``f`` over its running median."""
+    w = signal.get_window('hann', nps)
+    cont = np.zeros(f.size)
+    cont[1:] = spec.one_sided(f[1:])
+    psd = cont + line_bins(list(spec.lines), dt, nps) * 2.0 * dt / np.dot(w, w)
+    floor = ndimage.median_filter(psd, size=size, mode='nearest')
+    return psd / np.maximum(floor, 1e-300)
+
+
+def narrow_lines(x: np.ndarray, dt: float, spec=None, *,
+                 report_p: float = REPORT_P) -> Optional[dict]:
+    """
+    Lines standing out at fine resolution, and whether the model ``spec`` makes each.
+
+    Returns None for a record too short to look finer than the tone block. Contiguous
+    reported bins (one line leaks into its Hann neighbours) are one line, at its largest bin.
+    """
+    try:
+        scan = line_scan(x, dt)
+    except ValueError:
+        return None
+    hot = np.flatnonzero(scan['p'] < report_p)
+    groups = np.split(hot, np.flatnonzero(np.diff(hot) > 1) + 1) if hot.size else []
+    made = None
+    if spec is not None and groups:
+        f_all = np.fft.rfftfreq(scan['segment'], dt)
+        made = model_excess(spec, f_all, dt, scan['segment'], scan['size'])[scan['keep']]
+    found = []
+    for g in groups:
+        i = g[np.argmax(scan['excess'][g])]
+        excess = float(scan['excess'][i])
+        entry = {'frequency_hz': float(scan['f'][i]), 'excess': excess,
+                 'p_value': float(scan['p'][i]), 'bins': int(g.size)}
+        if made is not None:
+            entry['model_excess'] = float(made[i])
+            entry['in_model'] = bool(made[i] >= MODEL_SHARE * excess)
+        found.append(entry)
+    found.sort(key=lambda d: d['p_value'])
+    summary = {k: scan[k] for k in ('segment', 'resolution_hz', 'k_eff', 'tested_hz', 'bins')}
+    return {**summary, 'report_p': report_p, 'lines': found[:MAX_REPORTED],
+            'more': max(len(found) - MAX_REPORTED, 0)}
