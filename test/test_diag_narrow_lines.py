@@ -93,5 +93,25 @@ def test_the_cli_reports_the_scan_and_warns_only_of_lines_the_model_lacks(tmp_pa
     # Without the model the same line is warned about, with its frequency.
     bare = narrow_lines(x, DT, model_spectrum(N_ARW, 0.0, DT, []))
     warned = line_warnings(bare)
-    assert len(warned) == 1 and 'narrow line at 22.99' in warned[0]
+    assert len(warned) == 1 and 'narrow line at 23.000' in warned[0]
     assert bare['lines'][0]['in_model'] is False
+
+
+def test_the_search_names_a_line_only_the_fine_scan_sees_and_leaves_noise_alone():
+    from gyro_char.diagnosis import engine, static_expect
+    n = 720000                             # 2 h: the gap alone finds this record consistent
+    noise = SIG * np.random.default_rng(5).standard_normal(n) + 0.003
+    line = tone(n, 13.3, 0.02 * SIG, np.random.default_rng(6))
+    found = []
+    for x in (noise, noise + line):
+        problem = static_expect.closed_form_problem([x], DT, twins=16, seed=3)
+        found.append(engine.run(problem, repeats=16, seed=3, max_steps=2))
+    clean, lined = found
+    assert clean.selected_effects == [] and clean.verdict['code'] == 'consistent'
+    assert lined.baseline_gap < lined.null_gap['q95']       # invisible to the gap ...
+    assert lined.selected_effects == ['vibration']          # ... named by the line scan
+    step = lined.steps[-1]
+    assert step['evidence']['check'] == 'narrow_lines'
+    assert abs(step['params']['freq_hz'] - 13.3) < 0.002
+    assert step['params']['amplitude'] == pytest.approx(0.02 * SIG, rel=0.25)
+    assert lined.verdict['code'] == 'explained' and '13.300 Hz' in lined.verdict['text']

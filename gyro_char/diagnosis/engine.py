@@ -81,6 +81,10 @@ class Problem:
     # Whether a selected effect that the later ones have made redundant is dropped after the
     # joint refit (``greedy.prune``): a warm-up standing in for a random walk's trend.
     prune: bool = False
+    # A check finer than the gap, asked once the search is done (``narrow_lines``: steady
+    # lines too narrow for the gap's tone bands): ``lines(model)`` returns the effect that
+    # makes what the model lacks and the evidence, ``((name, params), evidence)``, or None.
+    lines: Optional[Callable[[list], Optional[tuple]]] = None
 
 
 def objective_for(problem: Problem, seeds: Sequence[int]):
@@ -283,6 +287,14 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
             selected, nuisance, current, dropped = prune(
                 objective, problem, selected, nuisance, current, base, base_needed,
                 base_explained)
+    if problem.lines is not None and all(n != 'vibration' for n, _ in selected):
+        found = problem.lines(selected + ([nuisance] if nuisance else []))
+        if found is not None:
+            (name, params), evidence = found
+            selected.append((name, params))
+            current = objective.evaluate(selected + ([nuisance] if nuisance else []))
+            steps.append({'effect': name, 'params': _jsonable(params),
+                          'gap_after': current.gap, 'evidence': evidence})
     evaluations['final'] = current
     model = selected + ([nuisance] if nuisance else [])
     names = [n for n, _ in selected]
@@ -307,7 +319,7 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         evaluations=evaluations,
         reals=problem.reals, model=model,
         verdict=verdict(base.gap, base_explained, names, current.gap, final_judged, final_q95,
-                        ranking))
+                        ranking, seen_finer=[s for s in steps if 'evidence' in s]))
 
 
 def choose_among(objective, problem: Problem, selected: list, fits: dict,

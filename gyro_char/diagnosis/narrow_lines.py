@@ -25,10 +25,11 @@ bins: its continuous part at the bin frequencies plus its lines' Hann leakage, o
 running median (``model_excess``); a line whose model excess reaches ``MODEL_SHARE`` of the
 record's is the model's. The others are what the gap cannot see.
 """
-from typing import Optional
+from typing import Callable, Optional, Tuple
 
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.expected import line_bins
+from gyro_char.sim.effects.vibration import TONES
 import numpy as np
 from scipy import ndimage, signal, special
 
@@ -38,6 +39,7 @@ FLOOR_SHARE = 100       # the floor's running median spans 1/FLOOR_SHARE of the 
 REPORT_P = 1e-3         # family-wise p below which a bin is reported
 HANN_INFLATION = 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0)   # neighbouring bins' correlation
 MAX_REPORTED = 10       # lines reported at most, smallest p first
+LINE_BINS = 2           # Hann leakage bins either side summed into a line's power
 MODEL_SHARE = 0.5       # a model excess this share of the record's makes the line the model's
 
 
@@ -80,7 +82,8 @@ def line_scan(x: np.ndarray, dt: float) -> dict:
     family = -np.expm1(m * np.log1p(-np.minimum(tail, 1.0 - 1e-16)))
     return {'segment': nps, 'resolution_hz': float(f[1]), 'k_eff': float(k),
             'tested_hz': [float(f[keep][0]), float(f[keep][-1])], 'bins': int(m),
-            'f': f[keep], 'excess': excess, 'p': family, 'keep': keep, 'size': size}
+            'f': f[keep], 'excess': excess, 'p': family, 'keep': keep, 'size': size,
+            'psd': p[keep], 'noise': floor[keep] / med}
 
 
 def floor_averaged_tail(excess: np.ndarray, k: float, size: int) -> np.ndarray:
@@ -126,8 +129,12 @@ def narrow_lines(x: np.ndarray, dt: float, spec=None, *,
     for g in groups:
         i = g[np.argmax(scan['excess'][g])]
         excess = float(scan['excess'][i])
-        entry = {'frequency_hz': float(scan['f'][i]), 'excess': excess,
-                 'p_value': float(scan['p'][i]), 'bins': int(g.size)}
+        lo, hi = max(g[0] - LINE_BINS, 0), min(g[-1] + LINE_BINS + 1, scan['f'].size)
+        power = float(np.sum(scan['psd'][lo:hi] - scan['noise'][lo:hi])
+                      * scan['resolution_hz'])
+        entry = {'frequency_hz': peak_frequency(scan, i), 'excess': excess,
+                 'p_value': float(scan['p'][i]), 'bins': int(g.size),
+                 'mean_square': max(power, 0.0)}
         if made is not None:
             entry['model_excess'] = float(made[i])
             entry['in_model'] = bool(made[i] >= MODEL_SHARE * excess)
@@ -136,3 +143,66 @@ def narrow_lines(x: np.ndarray, dt: float, spec=None, *,
     summary = {k: scan[k] for k in ('segment', 'resolution_hz', 'k_eff', 'tested_hz', 'bins')}
     return {**summary, 'report_p': report_p, 'lines': found[:MAX_REPORTED],
             'more': max(len(found) - MAX_REPORTED, 0)}
+
+
+def peak_frequency(scan: dict, i: int) -> float:
+    """Frequency of the line peaking at tested bin ``i``: the parabola through the log PSD."""
+    f, p = scan['f'], scan['psd']
+    if i == 0 or i == f.size - 1:
+        return float(f[i])
+    a, b, c = np.log(np.maximum(p[i - 1:i + 2], 1e-300))
+    den = a - 2.0 * b + c
+    shift = 0.5 * (a - c) / den if den < 0 else 0.0
+    return float(f[i] + np.clip(shift, -0.5, 0.5) * scan['resolution_hz'])
+
+
+def vibration_for(found: dict, spectrum: Callable[[list], object], model: list,
+                  tones: int = TONES) -> Optional[Tuple[str, dict]]:
+    """
+    Return the ``vibration`` effect that makes the lines ``found`` the ``model`` lacks.
+
+    The strongest ``tones`` of them, each at its bin's frequency, with the amplitude whose
+    output line (through the model's own filters: ``spectrum`` of the model plus a unit tone)
+    carries the line's measured mean square; None when the model lacks none.
+    """
+    new = [d for d in found['lines'] if not d.get('in_model', False)][:tones]
+    if not new:
+        return None
+    params = {}
+    for j, d in enumerate(sorted(new, key=lambda d: -d['mean_square'])):
+        f0 = d['frequency_hz']
+        unit = spectrum(list(model) + [('vibration', {'freq_hz': f0, 'amplitude': 1.0})])
+        gain = unit.lines[-1][1] if unit.lines else 0.0
+        amp = float(np.sqrt(d['mean_square'] / gain)) if gain > 0 else 0.0
+        key = '' if j == 0 else str(j + 1)
+        params[f'freq{key}_hz'] = f0
+        params[f'amplitude{key}'] = amp
+    return 'vibration', params
+
+
+class LineCheck:
+    """
+    ``Problem.lines`` of a static record: the vibration that makes the lines a model lacks.
+
+    ``spectrum(effects)``: the model spectrum of the baseline plus ``effects``
+    (``static_expect.StaticExpect.spectrum``). The record is scanned against the searched
+    model; the evidence names the lines, their resolution and the smallest p.
+    """
+
+    def __init__(self, x: np.ndarray, dt: float, spectrum: Callable[[list], object]):
+        self.x = np.asarray(x, dtype=np.float64)
+        self.dt = dt
+        self.spectrum = spectrum
+
+    def __call__(self, model: list) -> Optional[tuple]:
+        found = narrow_lines(self.x, self.dt, self.spectrum(list(model)))
+        effect = None if found is None else vibration_for(found, self.spectrum, model)
+        if effect is None:
+            return None
+        new = [d for d in found['lines'] if not d.get('in_model', False)][:TONES]
+        where = ', '.join(f'{d["frequency_hz"]:.3f}' for d in new)
+        what = 'a narrow line at {} Hz stands' if len(new) == 1 else 'narrow lines at {} Hz stand'
+        text = (f'{what.format(where)} out at {found["resolution_hz"]:.2g} Hz '
+                f"resolution, finer than the gap's tone bands (family-wise p "
+                f'{min(d["p_value"] for d in new):.1e})')
+        return effect, {'check': 'narrow_lines', 'text': text, 'lines': new}

@@ -18,6 +18,7 @@ from gyro_char.diagnosis import static as ds
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.kurtosis_choice import KurtosisCriterion
+from gyro_char.diagnosis.narrow_lines import LineCheck
 from gyro_char.diagnosis.spectra import model_spectrum
 import numpy as np
 
@@ -144,4 +145,6 @@ def closed_form_problem(records, dt, *, channel='gyro_x', max_samples=None,
     # Among significant candidates: the own-spread deviance plus the bands' kurtosis (a
     # steady envelope is a line's or a wandering tone's, not a mode's: ``kurtosis_choice``).
     problem.choose = KurtosisCriterion(problem.reals, problem.spaces, recs, dt, exp.spectrum)
+    # Steady lines too narrow for the tone bands, checked once the search is done.
+    problem.lines = LineCheck(recs[0], dt, exp.spectrum)
     return problem

@@ -7,7 +7,9 @@ the yardstick its steps were judged in, against the same percentile of the final
 twins (``explained`` when below, ``partly_explained`` when above). A record that departs from
 the baseline while no effect removed significantly more of the gap than noise-fitting would
 is ``unexplained``: an effect near detectability (where the ranking is a toss-up between
-candidates that all add a little variance) or of a form the catalogue lacks.
+candidates that all add a little variance) or of a form the catalogue lacks. An effect added
+by a check finer than the gap (``seen_finer``: narrow lines) on a record the gap finds
+consistent makes it ``explained`` by that effect, the check's evidence quoted.
 """
 from typing import Optional, Sequence
 
@@ -19,7 +21,7 @@ UNEXPLAINED = 'unexplained'
 
 def verdict(baseline_gap: float, baseline_q95: float, selected: Sequence[str],
             final_gap: float, final_judged: float, final_q95: Optional[float],
-            ranking: Sequence[dict]) -> dict:
+            ranking: Sequence[dict], seen_finer: Sequence[dict] = ()) -> dict:
     """
     Return ``{'code', 'text', 'final_gap_judged', 'final_model_q95'}`` (module docstring).
 
@@ -28,6 +30,12 @@ def verdict(baseline_gap: float, baseline_q95: float, selected: Sequence[str],
     """
     out = {'final_gap_judged': float(final_judged),
            'final_model_q95': None if final_q95 is None else float(final_q95)}
+    if baseline_gap <= baseline_q95 and seen_finer:
+        return {'code': EXPLAINED, **out,
+                'text': f"within the baseline model's own scatter by the gap ({baseline_gap:.2f}, "
+                        f"its twins' 95 % level {baseline_q95:.2f}), but "
+                        + '; '.join(s['evidence']['text'] for s in seen_finer)
+                        + ': explained by ' + ' + '.join(s['effect'] for s in seen_finer)}
     if baseline_gap <= baseline_q95:
         return {'code': CONSISTENT, **out,
                 'text': f"within the baseline model's own scatter (gap {baseline_gap:.2f}, "
