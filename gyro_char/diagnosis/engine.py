@@ -22,7 +22,9 @@ twins of those records under a list of effects, and the candidate effects' searc
    close the gap comparably are ranked by it instead of by the gap (``choose_among``);
 6. refits the selected effects jointly (coordinate passes, each with the others fixed) and
    reports the final gap after that (``refined``); when the kind asks for it, then drops
-   any selected effect the others have made redundant (``refined['dropped']``).
+   any selected effect the others have made redundant (``refined['dropped']``); when the
+   kind has a check finer than the gap (``Problem.lines``: narrow lines), adds the effect
+   that check finds missing, held where it put it, and refits the others around it;
 7. reads the result in one line (``verdict``): consistent, explained, partly explained or
    unexplained, from the same levels.
 """
@@ -293,6 +295,10 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
             (name, params), evidence = found
             selected.append((name, params))
             current = objective.evaluate(selected + ([nuisance] if nuisance else []))
+            # The other effects may have stood in for the line (a mode fitted to it): they
+            # are refitted around it, the line held where the finer check put it.
+            selected, nuisance, current = backfit(objective, problem, selected, nuisance,
+                                                  current, passes=1, hold=1)
             steps.append({'effect': name, 'params': _jsonable(params),
                           'gap_after': current.gap, 'evidence': evidence})
     evaluations['final'] = current

@@ -173,9 +173,12 @@ def could_trail(objective, truth: Evaluation, other: Evaluation,
 
 
 def backfit(objective, problem, selected: list, nuisance: Optional[tuple],
-            current: Evaluation, passes: int = 3, refine: int = 8):
+            current: Evaluation, passes: int = 3, refine: int = 8, hold: int = 0):
     """
     Refit every selected effect with the others fixed, in place, then the nuisance.
+
+    The last ``hold`` effects are kept as they are (an effect a finer check than the gap
+    placed, which the gap cannot refine).
 
     A greedy step fits one effect with the earlier ones frozen at values they took while they
     had to explain the whole gap alone (e.g. a smoothing filter made a little too wide to
@@ -189,7 +192,7 @@ def backfit(objective, problem, selected: list, nuisance: Optional[tuple],
     extra = [nuisance] if nuisance else []
     for _ in range(passes):
         before = current.gap
-        for k, (name, params) in enumerate(selected):
+        for k, (name, params) in enumerate(selected[:len(selected) - hold]):
             others = selected[:k] + selected[k + 1:]
             p, ev = fit_effect(objective, others + extra, spaces[name], near=params, at=k,
                                refine=refine)
