@@ -1,13 +1,13 @@
-# Held-out sets T, U, V, W, X and Y (bench/validate_diagnosis_heldout_{t,u,v,w,x,y}.py, static
-# only): the generators do what their docstrings claim, and the static harness reaches them by
-# --held-out t / u / v / w / x / y. THE GENERATORS only, never the diagnosis.
+# Held-out sets T, U, V, W, X, Y and Z (bench/validate_diagnosis_heldout_{t,u,v,w,x,y,z}.py,
+# static only): the generators do what their docstrings claim, and the static harness reaches
+# them by --held-out t / u / v / w / x / y / z. THE GENERATORS only, never the diagnosis.
 import bench_script
 from heldout_common import check_static_set, DT, N_ARW, rng, SIG, STATIC_NAMES, white
 import numpy as np
 import pytest
 from scipy import signal
 
-SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuvwxy'}
+SETS = {k: bench_script.load(f'validate_diagnosis_heldout_{k}') for k in 'tuvwxyz'}
 SHAPES = {k: m.shapes(DT, SIG, N_ARW) for k, m in SETS.items()}
 
 
@@ -123,3 +123,43 @@ def test_y_pulled_fan_is_a_one_sided_comb_below_the_compressor():
     share = [p[np.abs(f - hz) < 0.05].sum() / p.sum() for hz in (26.30, 26.06, 25.82)]
     assert share == pytest.approx([0.25, 0.56, 0.14], abs=0.03)
     assert p[f > 26.42].sum() < 1e-3 * p.sum()
+
+
+def test_z_bearing_peaks_widen_with_the_harmonic_order_as_a_renewal_train_does():
+    fn, levels = SHAPES['z']['vibration']
+    y = fn(np.zeros(2 ** 19), rng(13), **levels[1])
+    f = np.fft.rfftfreq(y.size, DT)
+    p = np.abs(np.fft.rfft(y)) ** 2
+    dense = np.linspace(1e-6, 0.5 / DT, 2000001)
+    want = SETS['z'].bearing_psd(1.0, DT)(dense)
+
+    def core(freq, power, k):       # the share of a harmonic's +-0.5 Hz within +-0.05 Hz
+        near = np.abs(freq - k * SETS['z'].BPFO_HZ)
+        return power[near < 0.05].sum() / power[near < 0.5].sum()
+    got = [core(f, p, k) for k in (2, 3, 4, 5, 6)]
+    assert got == pytest.approx([core(dense, want, k) for k in (2, 3, 4, 5, 6)], rel=0.1)
+    assert got[0] > 0.55 and got[-1] < 0.3 and np.all(np.diff(got) < 0)
+
+
+def test_z_loads_sit_on_a_poisson_lattice_and_decorrelate_exactly_at_2_tc():
+    fn, levels = SHAPES['z']['gauss_markov']
+    p, on = levels[0], SETS['z'].LOADS
+    y = fn(np.zeros(2 ** 22), rng(14), **p)
+    count = y / p['sd'] * np.sqrt(on) + on
+    assert np.allclose(count, np.round(count), rtol=0, atol=1e-9) and count.min() >= 0
+    assert [np.mean(count), np.var(count)] == pytest.approx([on, on], rel=0.05)
+    lag = int(round(p['tc'] / DT))
+    rho = [np.mean(y[:-m] * y[m:]) / np.mean(y * y) for m in (lag, 2 * lag, 3 * lag)]
+    assert rho[0] == pytest.approx(0.5, abs=0.04) and max(abs(rho[1]), abs(rho[2])) < 0.04
+
+
+def test_z_send_on_delta_sends_nothing_or_at_least_delta_and_loses_no_angle():
+    fn, levels = SHAPES['z']['quantization']
+    delta = levels[0]['delta']
+    x = white(400000, 15)
+    y = fn(x.copy(), rng(15), **levels[0])
+    sent = y != 0
+    unsent_angle = np.cumsum(x - y) * DT
+    assert np.all(np.abs(unsent_angle) < delta * (1 + 1e-6))
+    assert np.all(np.abs(y[sent]) * DT >= delta * (1 - 1e-9))
+    assert np.mean(sent) == pytest.approx(SETS['z'].delta_kernel(delta, DT, SIG)[4], rel=0.02)
