@@ -322,14 +322,19 @@ def report(rows, names) -> None:
     hit = [r for r in rows if r['truth'] and r['detected']]
     if hit:
         shrink = [1.0 - r['final_gap'] / r['baseline_gap'] for r in hit]
+        # The excess forms only where the gap is above the sim-vs-itself level (a line only
+        # the fine scan sees can sit below it: no excess to remove).
+        above = [r for r in hit if r['baseline_excess'] > 0.0
+                 and r['baseline_gap'] > r['null_mean']]
         excess = [(r['baseline_gap'] - r['final_gap']) / (r['baseline_gap'] - r['null_mean'])
-                  for r in hit]
+                  for r in above] or [float('nan')]
         # diagnose.excess_gap: the gap above the null level, in quadrature.
-        quad = [1.0 - r['final_excess'] / r['baseline_excess'] for r in hit]
+        quad = [1.0 - r['final_excess'] / r['baseline_excess'] for r in above] or [np.nan]
         print(f'median gap shrink over detected cases: 1 - final/baseline '
-              f'{100.0 * float(np.median(shrink)):.0f} %; share of the excess over the '
-              f'sim-vs-itself level removed {100.0 * float(np.median(excess)):.0f} %; '
-              f'1 - final_excess/baseline_excess {100.0 * float(np.median(quad)):.0f} %')
+              f'{100.0 * float(np.median(shrink)):.0f} %; over the {len(above)} with a gap '
+              f'above the sim-vs-itself level: share of that excess removed '
+              f'{100.0 * float(np.median(excess)):.0f} %, 1 - final_excess/baseline_excess '
+              f'{100.0 * float(np.median(quad)):.0f} %')
         low = [r for r, v in zip(hit, shrink) if v < 0.7]
         floor = [r for r in low if r['final_gap'] <= r['final_model_mean']]
         print(f'  cases below 70 %: {len(low)}/{len(hit)}, of which {len(floor)} end at or '
