@@ -115,3 +115,21 @@ def test_the_search_names_a_line_only_the_fine_scan_sees_and_leaves_noise_alone(
     assert abs(step['params']['freq_hz'] - 13.3) < 0.002
     assert step['params']['amplitude'] == pytest.approx(0.02 * SIG, rel=0.25)
     assert lined.verdict['code'] == 'explained' and '13.300 Hz' in lined.verdict['text']
+
+
+def test_a_record_whose_level_changes_along_it_makes_no_lines(monkeypatch):
+    # White noise whose second half is low-passed (a filter switched on mid-record): above
+    # the corner, half the segments hold all the power, the Welch bins have fewer degrees
+    # of freedom than the segment count says, and their tails would pass for lines.
+    from scipy import signal
+    from gyro_char.diagnosis import narrow_lines as nl
+    b, a = signal.butter(2, 5.0, fs=1 / DT)
+    records = []
+    for seed in range(1, 7):
+        x = SIG * np.random.default_rng(seed).standard_normal(N)
+        x[N // 2:] = signal.lfilter(b, a, x[N // 2:])
+        records.append(x)
+    assert sum(len(narrow_lines(x, DT)['lines']) for x in records) == 0
+    # Without the segments' own dispersion, the same records report lines.
+    monkeypatch.setattr(nl, 'dispersion', lambda seg, p, size: np.ones(p.size))
+    assert sum(len(narrow_lines(x, DT)['lines']) for x in records) >= 1

@@ -12,7 +12,10 @@ Test, per bin: the Welch PSD over its running median (``FLOOR_SHARE`` of the bin
 ~0.5 Hz: a mode wider than that lifts its own floor and is not a line here). Under Gaussian
 noise a bin is its mean times chi-square / dof with 2 K_eff degrees of freedom (K_eff: the
 overlapping Hann segments' equivalent count) and the running median is that mean times the
-law's median, so the bin's excess r has the tail P(chi2_(2K) > 2 K r med), averaged over
+law's median, so the bin's excess r has the tail P(chi2_(2K) > 2 K r med). K is divided by
+the segments' own dispersion about their mean (``dispersion``: 1 for stationary noise, more
+where the level changes along the record, whose bins then have fewer degrees of freedom),
+and the tail averaged over
 the floor's own error (the median of the window's bins: log-normal, relative sd
 1.2533 / sqrt(K n_eff), n_eff the window's bins over the Hann neighbours' variance
 inflation 1 + 2 (4/9 + 1/36); 9-point Gauss-Hermite). The family-wise p of a bin is
@@ -69,24 +72,42 @@ def line_scan(x: np.ndarray, dt: float) -> dict:
     if nps <= obs.welch_segment(x.size):
         raise ValueError(f'record too short for a finer line scan than the tone block: '
                          f'{x.size} samples (need >= {(MIN_SEGMENTS + 1) * 2048})')
-    f, p = signal.welch(x, fs=1.0 / dt, nperseg=nps)
-    k = equivalent_segments(x.size, nps)
+    f, _, seg = signal.spectrogram(x, fs=1.0 / dt, window='hann', nperseg=nps,
+                                   noverlap=nps // 2, detrend='constant', scaling='density')
+    p = seg.mean(axis=1)                # Welch's PSD (the mean of the segments')
     size = max(31, (p.size // FLOOR_SHARE) | 1)
+    k = equivalent_segments(x.size, nps) / dispersion(seg, p, size)
     floor = ndimage.median_filter(p, size=size, mode='nearest')
     half = size // 2
     keep = slice(half, p.size - half)
-    med = float(special.gammaincinv(k, 0.5) / k)
+    k = k[keep]
+    med = special.gammaincinv(k, 0.5) / k
     excess = p[keep] / np.maximum(floor[keep], 1e-300) * med
     tail = floor_averaged_tail(excess, k, size)
     m = excess.size
     family = -np.expm1(m * np.log1p(-np.minimum(tail, 1.0 - 1e-16)))
-    return {'segment': nps, 'resolution_hz': float(f[1]), 'k_eff': float(k),
+    return {'segment': nps, 'resolution_hz': float(f[1]), 'k_eff': float(np.median(k)),
             'tested_hz': [float(f[keep][0]), float(f[keep][-1])], 'bins': int(m),
             'f': f[keep], 'excess': excess, 'p': family, 'keep': keep, 'size': size,
             'psd': p[keep], 'noise': floor[keep] / med}
 
 
-def floor_averaged_tail(excess: np.ndarray, k: float, size: int) -> np.ndarray:
+def dispersion(seg: np.ndarray, p: np.ndarray, size: int) -> np.ndarray:
+    """
+    Per bin, how much more the segments' periodograms scatter than stationary noise's (>= 1).
+
+    A Gaussian stationary record's segment periodograms are exponential about their mean
+    (variance / mean^2 = 1); a record whose level changes along it (a filter switched on, a
+    burst) scatters more, and its Welch bins have fewer degrees of freedom than the segment
+    count says. The ratio is averaged over the floor's window (one bin's, over ~40 segments,
+    is too noisy), and never taken below 1.
+    """
+    ratio = seg.var(axis=1, ddof=1) / np.maximum(p * p, 1e-300)
+    local = ndimage.uniform_filter1d(ratio, size=size, mode='nearest')
+    return np.maximum(local, 1.0)
+
+
+def floor_averaged_tail(excess: np.ndarray, k, size: int) -> np.ndarray:
     """P(bin > excess x floor) for chi-square/dof bins (2k dof), the floor's error averaged."""
     sd = 1.2533 / np.sqrt(k * size / HANN_INFLATION)
     x, w = np.polynomial.hermite_e.hermegauss(9)
