@@ -133,3 +133,16 @@ def test_a_record_whose_level_changes_along_it_makes_no_lines(monkeypatch):
     # Without the segments' own dispersion, the same records report lines.
     monkeypatch.setattr(nl, 'dispersion', lambda seg, p, size: np.ones(p.size))
     assert sum(len(narrow_lines(x, DT)['lines']) for x in records) >= 1
+
+
+def test_the_twin_path_reports_the_scan_against_its_own_baseline():
+    from gyro_char.diagnosis import static
+    from gyro_char.jobs.diagnose_static import narrow
+    n = 2 ** 17
+    rng = np.random.default_rng(9)
+    x = SIG * rng.standard_normal(n) + tone(n, 17.0, 2 * SIG, rng)
+    problem = static.static_problem([x], DT, channel='gyro_x')
+    assert problem.expect is None and problem.lines is None     # no naming on this path
+    scan = narrow(x, DT, None, problem, [])
+    assert abs(scan['lines'][0]['frequency_hz'] - 17.0) < 0.01
+    assert scan['lines'][0]['in_model'] is False
