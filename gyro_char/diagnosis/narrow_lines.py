@@ -6,7 +6,7 @@ wide enough bins for wandering tones and modes, with hundreds of segments behind
 A steady line's excess over the noise in its bin grows as the segment length while the
 bin's scatter falls only as the square root of the number of segments, so a line the tone
 block cannot see stands far out at a finer resolution (a 2 h record: segments of 2^15
-samples, 0.003 Hz, 43 segments).
+samples, 0.003 Hz, 42 of them).
 
 Test, per bin: the Welch PSD over its running median (``FLOOR_SHARE`` of the bins wide,
 ~0.5 Hz: a mode wider than that lifts its own floor and is not a line here). Under Gaussian
@@ -15,13 +15,11 @@ overlapping Hann segments' equivalent count) and the running median is that mean
 law's median, so the bin's excess r has the tail P(chi2_(2K) > 2 K r med). K is divided by
 the segments' own dispersion about their mean (``dispersion``: 1 for stationary noise, more
 where the level changes along the record, whose bins then have fewer degrees of freedom),
-and the tail averaged over
-the floor's own error (the median of the window's bins: log-normal, relative sd
-1.2533 / sqrt(K n_eff), n_eff the window's bins over the Hann neighbours' variance
-inflation 1 + 2 (4/9 + 1/36); 9-point Gauss-Hermite). The family-wise p of a bin is
-1 - (1 - tail)^M over the M bins tested (neighbouring Hann bins correlate, which makes it
-conservative). Bins within half a floor window of either end are
-not tested.
+and the tail is averaged over the floor's own error (the median of the window's bins:
+log-normal, relative sd 1.2533 / sqrt(K n_eff), n_eff the window's bins over the Hann
+neighbours' variance inflation 1 + 2 (4/9 + 1/36); 9-point Gauss-Hermite). The family-wise
+p of a bin is 1 - (1 - tail)^M over the M bins tested (neighbouring Hann bins correlate,
+which makes it conservative). Bins within half a floor window of either end are not tested.
 
 Whether the selected model makes a line is read off the model's own spectrum on the same
 bins: its continuous part at the bin frequencies plus its lines' Hann leakage, over its own
