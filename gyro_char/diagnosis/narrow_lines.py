@@ -126,18 +126,20 @@ def model_excess(spec, f: np.ndarray, dt: float, nps: int, size: int) -> np.ndar
     return psd / np.maximum(floor, 1e-300)
 
 
-def narrow_lines(x: np.ndarray, dt: float, spec=None, *,
-                 report_p: float = REPORT_P) -> Optional[dict]:
+def narrow_lines(x: np.ndarray, dt: float, spec=None, *, report_p: float = REPORT_P,
+                 scan: Optional[dict] = None) -> Optional[dict]:
     """
     Lines standing out at fine resolution, and whether the model ``spec`` makes each.
 
     Returns None for a record too short to look finer than the tone block. Contiguous
     reported bins (one line leaks into its Hann neighbours) are one line, at its largest bin.
+    ``scan``: the record's ``line_scan``, if the caller has it already.
     """
-    try:
-        scan = line_scan(x, dt)
-    except ValueError:
-        return None
+    if scan is None:
+        try:
+            scan = line_scan(x, dt)
+        except ValueError:
+            return None
     hot = np.flatnonzero(scan['p'] < report_p)
     groups = np.split(hot, np.flatnonzero(np.diff(hot) > 1) + 1) if hot.size else []
     made = None
@@ -165,28 +167,28 @@ def narrow_lines(x: np.ndarray, dt: float, spec=None, *,
 
 
 def peak_frequency(scan: dict, i: int) -> float:
-    """Frequency of the line peaking at tested bin ``i``: the parabola through the log PSD."""
-    f, p = scan['f'], scan['psd']
+    """Frequency of the line peaking at tested bin ``i`` (``observables.peak_shift``)."""
+    f = scan['f']
     if i == 0 or i == f.size - 1:
         return float(f[i])
-    a, b, c = np.log(np.maximum(p[i - 1:i + 2], 1e-300))
-    den = a - 2.0 * b + c
-    shift = 0.5 * (a - c) / den if den < 0 else 0.0
-    return float(f[i] + np.clip(shift, -0.5, 0.5) * scan['resolution_hz'])
+    shift = obs.peak_shift(scan['psd'], np.array([i]))[0]
+    return float(f[i] + shift * scan['resolution_hz'])
 
 
-def vibration_for(found: dict, spectrum: Callable[[list], object], model: list,
-                  tones: int = TONES) -> Optional[Tuple[str, dict]]:
+def missing(found: dict) -> list:
+    """Return the reported lines the model does not make, smallest p first."""
+    return [d for d in found['lines'] if not d.get('in_model', False)]
+
+
+def vibration_for(new: list, spectrum: Callable[[list], object],
+                  model: list) -> Tuple[str, dict]:
     """
-    Return the ``vibration`` effect that makes the lines ``found`` the ``model`` lacks.
+    Return the ``vibration`` effect that makes the lines ``new`` (at most ``TONES``).
 
-    The strongest ``tones`` of them, each at its bin's frequency, with the amplitude whose
-    output line (through the model's own filters: ``spectrum`` of the model plus a unit tone)
-    carries the line's measured mean square; None when the model lacks none.
+    Each line at its peak frequency, with the amplitude whose output line (through the
+    model's own filters: ``spectrum`` of the model plus a unit tone) carries the line's
+    measured mean square.
     """
-    new = [d for d in found['lines'] if not d.get('in_model', False)][:tones]
-    if not new:
-        return None
     params = {}
     for j, d in enumerate(sorted(new, key=lambda d: -d['mean_square'])):
         f0 = d['frequency_hz']
@@ -204,24 +206,35 @@ class LineCheck:
     ``Problem.lines`` of a static record: the vibration that makes the lines a model lacks.
 
     ``spectrum(effects)``: the model spectrum of the baseline plus ``effects``
-    (``static_expect.StaticExpect.spectrum``). The record is scanned against the searched
-    model; the evidence names the lines, their resolution and the smallest p.
+    (``static_expect.StaticExpect.spectrum``). The record is scanned once (``line_scan``
+    does not depend on the model); ``report`` compares it with a model, a call names what
+    that model lacks, with the evidence: the lines, their resolution and the smallest p.
     """
 
     def __init__(self, x: np.ndarray, dt: float, spectrum: Callable[[list], object]):
         self.x = np.asarray(x, dtype=np.float64)
         self.dt = dt
         self.spectrum = spectrum
+        self._scan = None
+
+    def report(self, model: list) -> Optional[dict]:
+        """Return ``narrow_lines`` of the record against ``model`` (None: too short)."""
+        if self._scan is None:
+            try:
+                self._scan = line_scan(self.x, self.dt)
+            except ValueError:
+                return None
+        return narrow_lines(self.x, self.dt, self.spectrum(list(model)), scan=self._scan)
 
     def __call__(self, model: list) -> Optional[tuple]:
-        found = narrow_lines(self.x, self.dt, self.spectrum(list(model)))
-        effect = None if found is None else vibration_for(found, self.spectrum, model)
-        if effect is None:
+        found = self.report(model)
+        new = [] if found is None else missing(found)[:TONES]
+        if not new:
             return None
-        new = [d for d in found['lines'] if not d.get('in_model', False)][:TONES]
         where = ', '.join(f'{d["frequency_hz"]:.3f}' for d in new)
         what = 'a narrow line at {} Hz stands' if len(new) == 1 else 'narrow lines at {} Hz stand'
         text = (f'{what.format(where)} out at {found["resolution_hz"]:.2g} Hz '
                 f"resolution, finer than the gap's tone bands (family-wise p "
                 f'{min(d["p_value"] for d in new):.1e})')
-        return effect, {'check': 'narrow_lines', 'text': text, 'lines': new}
+        return (vibration_for(new, self.spectrum, model),
+                {'check': 'narrow_lines', 'text': text, 'lines': new})

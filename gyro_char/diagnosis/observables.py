@@ -226,14 +226,24 @@ def narrow_lines(x: np.ndarray, dt: float, *, z: float = COMB_Z, psd=None):
     peak[1:-1] &= (p[1:-1] >= p[:-2]) & (p[1:-1] >= p[2:])
     idx = np.flatnonzero(peak)
     idx = idx[np.argsort(prom[idx])[::-1][:COMB_MAX_LINES]]
-    lp = np.log(np.maximum(p, 1e-300))
     i = np.clip(idx, 1, p.size - 2)
-    den = lp[i - 1] - 2.0 * lp[i] + lp[i + 1]
-    shift = np.where(den < 0, 0.5 * (lp[i - 1] - lp[i + 1]) / np.where(den < 0, den, -1.0), 0.0)
-    freqs = f[i] + np.clip(shift, -0.5, 0.5) * f[1]
+    freqs = f[i] + peak_shift(p, i) * f[1]
     excess = np.maximum(p - base, 0.0)
     power = [excess[max(k - 3, 0):k + 4].sum() * f[1] for k in np.round(freqs / f[1]).astype(int)]
     return freqs, np.sqrt(2.0 * np.asarray(power, dtype=float))
+
+
+def peak_shift(p: np.ndarray, i: np.ndarray) -> np.ndarray:
+    """
+    Offset (bins, within +-1/2) of the peaks at interior bins ``i`` of the PSD ``p``.
+
+    The vertex of the parabola through the log PSD at each peak and its two neighbours (0
+    where the three do not bend down).
+    """
+    lp = np.log(np.maximum(p, 1e-300))
+    den = lp[i - 1] - 2.0 * lp[i] + lp[i + 1]
+    shift = np.where(den < 0, 0.5 * (lp[i - 1] - lp[i + 1]) / np.where(den < 0, den, -1.0), 0.0)
+    return np.clip(shift, -0.5, 0.5)
 
 
 def broad_peak(psd, *, rise: float = BUMP_RISE):

@@ -153,21 +153,29 @@ def non_gaussian(x, dt: float, max_samples: Optional[int], expect, model) -> lis
 
 
 def narrow(x, dt: float, max_samples: Optional[int], problem, model) -> Optional[dict]:
-    """Lines of the analysed record at fine resolution, each marked if the model makes it."""
-    from gyro_char.diagnosis.narrow_lines import narrow_lines
+    """
+    Lines of the analysed record at fine resolution, each marked if the model makes it.
+
+    The problem's own check (closed forms: it scanned the record already), else one on the
+    twin path's baseline.
+    """
+    from gyro_char.diagnosis.narrow_lines import LineCheck
     from gyro_char.diagnosis.static_expect import StaticExpect
-    x = np.asarray(x, dtype=np.float64)[:max_samples or None]
-    expect = problem.expect or StaticExpect(problem.context, [])
-    return narrow_lines(x, dt, expect.spectrum(list(model)))
+    check = problem.lines
+    if check is None:
+        x = np.asarray(x, dtype=np.float64)[:max_samples or None]
+        check = LineCheck(x, dt, StaticExpect(problem.context, []).spectrum)
+    return check.report(model)
 
 
 def line_warnings(scan: dict) -> List[str]:
     """Say in words which narrow lines the selected model does not make."""
+    from gyro_char.diagnosis.narrow_lines import missing
     return [f'a narrow line at {d["frequency_hz"]:.4f} Hz, {d["excess"]:.2f} x the local noise '
             f'floor in {scan["resolution_hz"]:.2g} Hz bins (family-wise p {d["p_value"]:.1e}), '
             "that the selected model does not make: a steady line finer than the gap's tone "
             'bands resolve (see "narrow_lines")'
-            for d in scan['lines'] if not d.get('in_model', False)]
+            for d in missing(scan)]
 
 
 def band_warnings(bands: Sequence[dict]) -> List[str]:
