@@ -87,7 +87,7 @@ class _ScoredObjective:
 
 def refit_score(objective, score: Callable[[Evaluation], float], others: list,
                 space: EffectSpace, params: Dict, nuisance=None,
-                nuisance_space: Optional[EffectSpace] = None) -> float:
+                nuisance_space: Optional[EffectSpace] = None):
     """
     Return the best score of ``space`` on top of ``others``, searched near its gap fit.
 
@@ -95,7 +95,7 @@ def refit_score(objective, score: Callable[[Evaluation], float], others: list,
     own likelihood may peak elsewhere (e.g. a random walk a little weaker, with the white
     noise a little stronger), so each candidate is compared at its own best: its parameters,
     then the baseline's nuisance parameters (``nuisance``, within ``nuisance_space``), then
-    its parameters again.
+    its parameters again. Returns the score, the parameters and the nuisance entry there.
     """
     scored = _ScoredObjective(objective, score)
     extra = [nuisance] if nuisance else []
@@ -114,4 +114,24 @@ def refit_score(objective, score: Callable[[Evaluation], float], others: list,
             if ev.gap < best:
                 params = p
         best = min(best, ev.gap)
-    return best
+    return best, params, (extra[0] if extra else None)
+
+
+def model_score(objective, score: Callable[[Evaluation], float], effects: list,
+                nuisance_space: Optional[EffectSpace] = None) -> float:
+    """
+    Return the score of a fixed model, its nuisance entry (if any) refitted to the score.
+
+    What a candidate scored by ``refit_score`` is compared with: the model so far at its own
+    best, so that a candidate does not win by the nuisance refit alone.
+    """
+    best = score(objective.evaluate(list(effects)))
+    if nuisance_space is None:
+        return best
+    nuis = [e for e in effects if e[0] == nuisance_space.name]
+    if not nuis:
+        return best
+    others = [e for e in effects if e[0] != nuisance_space.name]
+    _, ev = fit_effect(_ScoredObjective(objective, score), others, nuisance_space,
+                       near=nuis[0][1], refine=3)
+    return min(best, ev.gap)

@@ -19,7 +19,8 @@ twins of those records under a list of effects, and the candidate effects' searc
    the run that would separate them instead of pretending to know; with three or more such
    candidates that are not all known look-alikes, none is selected and the search stops;
    when the problem has a ``choose`` criterion (``choice.Criterion``), the candidates that
-   close the gap comparably are ranked by it instead of by the gap (``choose_among``);
+   close the gap comparably are ranked by it instead of by the gap, and where none closes
+   it in the common scatter, one that does in its own may be selected by it (``step_choice``);
 6. refits the selected effects jointly (coordinate passes, each with the others fixed) and
    reports the final gap after that (``refined``); when the kind asks for it, then drops
    any selected effect the others have made redundant (``refined['dropped']``); when the
@@ -31,8 +32,8 @@ twins of those records under a list of effects, and the candidate effects' searc
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence
 
-from gyro_char.diagnosis import gap as diag_gap
-from gyro_char.diagnosis.choice import INDISTINGUISHABLE, refit_score
+from gyro_char.diagnosis import gap as diag_gap, step_choice
+from gyro_char.diagnosis.choice import INDISTINGUISHABLE
 from gyro_char.diagnosis.closed_form import ExpectedObjective
 from gyro_char.diagnosis.fit import EffectSpace, Evaluation, fit_effect, GapObjective
 from gyro_char.diagnosis.greedy import (
@@ -145,9 +146,6 @@ class Diagnosis:
         }
 
 
-# With a choice criterion, a candidate is compared with the best one by the gap when it
-# removes at least this share of what the best removes.
-COMPARABLE = 0.5
 # A rival of an unresolved look-alike pair (``Problem.unresolved``) is flagged when it removes
 # at least this share of what the best removes.
 UNRESOLVED_SHARE = 0.8
@@ -234,29 +232,19 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         judged = {n: gap_in(objective, f[2], scatters) for n, f in fits.items()}
         order = sorted(fits, key=lambda n: judged[n])
         best = order[0]
-        if gap_now - judged[best] <= shrink_needed:
-            break
-        rivals = [n for n in order[1:]
-                  if gap_now - judged[n] > shrink_needed
-                  and (judged[n] - judged[best] <= shrink_needed
-                       or judged[n] - judged[best] <= could_trail(
-                           objective, fits[n][2], fits[best][2], scatters))]
-        rivals += [n for n in order[1:] if n not in rivals
-                   and frozenset({best, n}) in problem.unresolved
-                   and gap_now - judged[n] >= UNRESOLVED_SHARE * (gap_now - judged[best])]
-        scores = {}
-        if problem.choose is not None:
-            # Candidates that close the gap comparably (the rivals, and any that remove at
-            # least half of what the best removes) are told apart by the kind's own
-            # criterion (``choose_among``), not by how well their mean curves follow this
-            # one realization.
-            close = [n for n in order[1:] if n in rivals
-                     or gap_now - judged[n] >= COMPARABLE * (gap_now - judged[best])]
-            if close:
-                best, others, scores = choose_among(objective, problem, selected, fits,
-                                                    [best] + close)
-                rivals = [n for n in others if n in rivals
-                          or scores[n] - scores[best] <= INDISTINGUISHABLE]
+        before = None
+        if gap_now - judged[best] > shrink_needed:
+            best, rivals, scores = _rivals(objective, problem, selected, fits, judged, order,
+                                           gap_now, shrink_needed, scatters)
+        else:
+            # None closes the gap in the common scatter; one may in its own (a random walk
+            # beside the warm-up that took its trend): ``step_choice.own_step``.
+            found = (step_choice.own_step(objective, problem, selected, current, fits, order,
+                                          scatters, gap_now, explained, shrink_needed)
+                     if problem.choose is not None else None)
+            if found is None:
+                break
+            best, rivals, scores, before = found
         params, best_nuisance, ev = fits[best]
         if rivals:
             # Look-alikes (known pairs, see SEPARATING_RUNS): keep the best, say which run
@@ -279,7 +267,8 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         selected.append((best, params))
         nuisance = best_nuisance
         steps.append({'effect': best, 'params': _jsonable(params), 'gap_after': ev.gap,
-                      **({'criterion': scores} if scores else {})})
+                      **({'criterion': scores} if scores else {}),
+                      **({'own_scatter': {'criterion_before': before}} if before else {})})
         current = ev
     greedy_gap = current.gap
     dropped = []
@@ -328,21 +317,34 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
                         ranking, seen_finer=[s for s in steps if 'evidence' in s]))
 
 
-def choose_among(objective, problem: Problem, selected: list, fits: dict,
-                 significant: Sequence[str]):
+def _rivals(objective, problem: Problem, selected: list, fits: dict, judged: dict,
+            order: list, gap_now: float, shrink_needed: float, scatters: list):
     """
-    Best of the ``significant`` candidates by ``problem.choose``, each refitted to it.
+    Return the step's effect, its rivals and the criterion's scores, from the gaps.
 
-    Returns the best and the others, best first, and the scores.
+    Rivals close the gap within ``shrink_needed`` of the best (or within what the true model
+    could trail by), or form an unresolved look-alike pair with it. With a choice
+    criterion, the candidates that close the gap comparably are ranked by it instead
+    (``step_choice``), not by how well their mean curves follow this one realization.
     """
-    spaces = {s.name: s for s in problem.spaces}
+    best = order[0]
+    rivals = [n for n in order[1:]
+              if gap_now - judged[n] > shrink_needed
+              and (judged[n] - judged[best] <= shrink_needed
+                   or judged[n] - judged[best] <= could_trail(
+                       objective, fits[n][2], fits[best][2], scatters))]
+    rivals += [n for n in order[1:] if n not in rivals
+               and frozenset({best, n}) in problem.unresolved
+               and gap_now - judged[n] >= UNRESOLVED_SHARE * (gap_now - judged[best])]
     scores = {}
-    for n in significant:
-        params, nuis, _ = fits[n]
-        scores[n] = refit_score(objective, problem.choose, list(selected), spaces[n], params,
-                                nuis, problem.nuisance)
-    ranked = sorted(significant, key=lambda n: scores[n])
-    return ranked[0], ranked[1:], {n: float(v) for n, v in scores.items()}
+    if problem.choose is not None:
+        close = step_choice.comparable(order, judged, gap_now, rivals)
+        if close:
+            best, others, scores = step_choice.choose_among(objective, problem, selected, fits,
+                                                            [best] + close)
+            rivals = [n for n in others if n in rivals
+                      or scores[n] - scores[best] <= INDISTINGUISHABLE]
+    return best, rivals, scores
 
 
 def evaluate_model(problem: Problem, effects: Sequence, *, repeats: int = 10,
