@@ -81,3 +81,25 @@ def test_criterion_counts_an_alternative_searchs_parameters_and_estimated_values
         ('tone', tone), ('comb', {**tone, 'spacing_hz': 1.5, 'width_hz': 3.0}))}
     n = sum(np.size(v) for v in p.reals[0].values())
     assert abs(score['comb'] - score['tone'] - 2 * np.log(n)) < 1e-9
+
+
+def test_slow_candidates_that_tie_are_look_alikes_and_the_best_is_named():
+    # A plain random walk over 22 min whose four slow candidates (walk, Gauss-Markov, flicker,
+    # a warm-up) close the gap alike. With three or more rivals that are not all known
+    # look-alikes nothing is named; a warm-up and a slow Gauss-Markov excursion were not a
+    # known pair (the run that separates them is the warm-up's: a repeat after a full
+    # warm-up), so this walk was left unexplained at a gap of 5.4 (as was held-out set K's
+    # walk). Now the criterion's best is named, the others flagged.
+    h = bench_script.load('validate_diagnosis')
+    n, k = 131072, 1e-4
+    rng = np.random.default_rng(296)
+    walk = np.cumsum(rng.standard_normal(n)) * k * np.sqrt(h.DT)
+    x = h.clean(n, np.random.default_rng(1296)) + walk
+    x = np.round(x / h.LSB) * h.LSB
+    p = static_expect.closed_form_problem([x], h.DT, twins=8, seed=313)
+    d = engine.run(p, repeats=8, seed=313)
+    assert d.selected_effects[:1] == ['rate_random_walk']
+    flagged = d.ambiguous[0]
+    assert flagged['selected'] and set(flagged['effects']) == {
+        'rate_random_walk', 'gauss_markov', 'bias_instability', 'temperature_drift'}
+    assert 'after a full warm-up' in flagged['separating_run']

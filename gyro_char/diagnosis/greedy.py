@@ -32,6 +32,9 @@ SEPARATING_RUNS = {
         'transient recurs at switch-on, a random walk does not',
     frozenset({'temperature_drift', 'bias_instability'}):
         'a repeat static record after a full warm-up (or with the temperature logged)',
+    frozenset({'temperature_drift', 'gauss_markov'}):
+        'a repeat static record after a full warm-up (or with the temperature logged): a thermal '
+        'transient recurs at switch-on, a slow Gauss-Markov excursion does not',
     frozenset({'time_delay', 'g_sensitivity'}):
         'repeat at a second swing period (e.g. half; a second amplitude alone scales both '
         'alike) and diagnose both runs together: the cos θ residual of a delay scales as A·ω, '
