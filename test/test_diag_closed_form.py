@@ -79,6 +79,13 @@ CASES = {
     'notch_with_dlpf_and_tone': [('internal_lowpass', {**DLPF[1], 'notch_hz': 23.0,
                                                        'notch_q': 4.0}),
                                  ('vibration', {'amplitude': 3e-3, 'freq_hz': 24.1})],
+    # A mode-split sense response (a peak near the split, a 1 / f fall) under a tone, after
+    # the quantizer in the list: it filters the rate before the output stage.
+    'sense_split_under_tone': [('quantization', {'step_rad': 2e-4, 'dither': 1.0}),
+                               ('vibration', {'amplitude': 3e-3, 'freq_hz': 12.7}),
+                               ('internal_lowpass', {'taps': 1.0, 'stages': 1.0,
+                                                     'decimation': 1.0, 'split_hz': 30.0,
+                                                     'sense_hz': 7.5})],
 }
 
 

@@ -6,7 +6,7 @@ from gyro_char.diagnosis.engine import run
 from gyro_char.diagnosis.fit import EffectSpace, Evaluation, fit_effect, Param
 from gyro_char.errors import InputError
 from gyro_char.sim.effects import EFFECTS
-from gyro_char.sim.effects.sensor import output_lowpass, output_lowpass_gain2
+from gyro_char.sim.effects.responses import output_lowpass, output_lowpass_gain2
 import numpy as np
 import pytest
 from scipy import signal

@@ -5,7 +5,7 @@ from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.static_bands import with_notch_band
 from gyro_char.errors import InputError
 from gyro_char.sim.effects import EFFECTS
-from gyro_char.sim.effects.sensor import output_notch, output_notch_gain2
+from gyro_char.sim.effects.responses import output_notch, output_notch_gain2
 import numpy as np
 import pytest
 from scipy import signal

@@ -28,8 +28,8 @@ from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import rounding, wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
-from gyro_char.sim.effects.sensor import (DEFAULT_PIVOT_HZ, output_lowpass_gain2,
-                                          output_notch_gain2, pivot_scale)
+from gyro_char.sim.effects.responses import output_lowpass_gain2, output_notch_gain2, sense_gain2
+from gyro_char.sim.effects.sensor import DEFAULT_PIVOT_HZ, pivot_scale
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines, WANDER_S
 import numpy as np
 
@@ -149,12 +149,14 @@ class ModelSpectrum:
     # noise's spectrum; ``band_kurtosis``): (f_out, mean square, wander_hz, wander_s, index
     # in ``internal``).
     envelopes: List[tuple] = field(default_factory=list)
-    # The output-rate filters (``internal_lowpass`` corner_hz, order; notch_hz, notch_q): 0
-    # for none.
+    # The output-rate filters (``internal_lowpass`` corner_hz, order; notch_hz, notch_q;
+    # the mode-split sense response split_hz, sense_hz): 0 for none.
     corner_hz: float = 0.0
     order: int = 0
     notch_hz: float = 0.0
     notch_q: float = 0.0
+    split_hz: float = 0.0
+    sense_hz: float = 0.0
     _hold_terms: dict = field(default_factory=dict, repr=False)
 
     def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
@@ -191,15 +193,17 @@ class ModelSpectrum:
     @property
     def filtered(self) -> bool:
         """Whether an output-rate filter is set (``g2`` is not 1)."""
-        return bool(self.corner_hz or self.notch_hz)
+        return bool(self.corner_hz or self.notch_hz or self.split_hz)
 
     def g2(self, f) -> np.ndarray:
-        """|G(f)|^2 of the output-rate low-pass and notch at output frequencies ``f``."""
+        """|G(f)|^2 of the output-rate filters at output frequencies ``f``."""
         out = np.ones(np.shape(f))
         if self.corner_hz:
             out = out * output_lowpass_gain2(f, self.corner_hz, self.order, self.dt)
         if self.notch_hz:
             out = out * output_notch_gain2(f, self.notch_hz, self.notch_q, self.dt)
+        if self.split_hz:
+            out = out * sense_gain2(f, self.split_hz, self.sense_hz)
         return out
 
     def images(self, f: np.ndarray) -> list:
@@ -335,7 +339,8 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
     than 1.2 per-sample sd). Raises ValueError for an effect without a closed form (a motion
     or encoder effect).
     """
-    decim, taps, stages, holds, corner, order, notch = 1, 1, 1, None, 0.0, 0, (0.0, 0.0)
+    decim, taps, stages, holds, corner, order = 1, 1, 1, None, 0.0, 0
+    notch, split = (0.0, 0.0), (0.0, 0.0)
     for name, p in effects:
         if name == 'internal_lowpass':
             decim = max(decim, int(p.get('decimation', 1.0)))
@@ -343,6 +348,8 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
             corner, order = p.get('corner_hz', 0.0), int(p.get('order', 2.0))
             if p.get('notch_hz', 0.0):
                 notch = (p['notch_hz'], p.get('notch_q', 5.0))
+            if p.get('split_hz', 0.0):
+                split = (p['split_hz'], p.get('sense_hz', 5.0))
         elif name == 'stale_samples':
             holds = Holds.from_params(p)
     h = moving_average_kernel(taps, stages)
@@ -353,7 +360,8 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,
                          white_int=(n_white / gain) ** 2,
                          output_white=_rounding(n_white, lsb, dt, bias) * dt, corner_hz=corner,
-                         order=order if corner else 0, notch_hz=notch[0], notch_q=notch[1])
+                         order=order if corner else 0, notch_hz=notch[0], notch_q=notch[1],
+                         split_hz=split[0], sense_hz=split[1])
     for name, p in effects:
         if name not in CLOSED_FORM:
             raise ValueError(f'effect {name} has no closed-form static spectrum')

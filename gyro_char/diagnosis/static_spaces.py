@@ -73,6 +73,7 @@ def static_spaces(base, x: np.ndarray,
     sig_sample = base.N / np.sqrt(dt)
     # The most prominent narrow peak, however weak: if a tone is there at all, that is where.
     psd = obs.welch_psd(x, dt)
+    bump = obs.broad_peak(psd)
     tones = obs.detected_tones(x, dt, min_prominence=0.0, max_tones=1, psd=psd)
     f_tone = float(tones[0]) if tones.size else 0.25 / dt
     df = 1.0 / (obs.welch_segment(n) * dt)
@@ -119,13 +120,16 @@ def static_spaces(base, x: np.ndarray,
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
         # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline. Or the
         # output-rate Butterworth low-pass (a DLPF) of order 1 or 2: the averages, decimated,
-        # make whole steps of correlation, a gentle roll-off below Nyquist is the DLPF's.
+        # make whole steps of correlation, a gentle roll-off below Nyquist is the DLPF's. Or
+        # a mode-split sense channel's response (a peak near the split, then a fall): started
+        # at the PSD's broad bump where it has one.
         'internal_lowpass': EffectSpace('internal_lowpass', [
             Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
             fixed={'decimation': 8.0}, alternatives=(EffectSpace('internal_lowpass', [
                 Param('corner_hz', DLPF_LO / dt, DLPF_HI / dt, nyquist=0.5 / dt),
                 Param('order', 1, 2, integer=True, choice=True)],
-                fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),), refit_all=True),
+                fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),
+                split_space(dt, psd, bump)), refit_all=True),
         # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
         # output Nyquist frequency, means no corner): B first without a corner, then the
         # corner, then both again (a corner moves the best B; refits near it: one pass). The
@@ -162,7 +166,7 @@ def static_spaces(base, x: np.ndarray,
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
                                      lines, levels, wander=wander),
-        'resonance': resonance_space(sig_sample, f_tone, dt, obs.broad_peak(psd)),
+        'resonance': resonance_space(sig_sample, f_tone, dt, bump),
     }
     # Holds: searched where the record repeats samples exactly beyond what its rounding does
     # (``holds.repeat_excess``; everywhere if the step is too coarse to tell). Where the
@@ -193,6 +197,32 @@ def static_spaces(base, x: np.ndarray,
             spaces['stale_samples'].alternatives = (EffectSpace('stale_samples', [
                 p_param, Param('run', 1.5, RUN_MAX, init=min(length, RUN_MAX))]),)
     return [spaces[k] for k in names if k in spaces]
+
+
+def split_space(dt: float, psd, bump=None) -> EffectSpace:
+    """
+    ``internal_lowpass``'s mode-split sense response: the split and the sense half bandwidth.
+
+    The split from 2 % of the rate to 5 times the rate (a split above Nyquist still lifts the
+    top of the band, by 2 (f / split)^2 in power); the half bandwidth from 0.2 % to 20 % of
+    the rate. Where the PSD has a broad bump the response is started there, peaking as high
+    as the bump stands over the white band (1-5 % of the rate): a peak of about split / 2
+    sense in amplitude. Its valley is narrow (a tenth off in either moves a 2 h record's PSD
+    far more than its scatter), which a start from mid-range does not find.
+    """
+    lo, hi = DLPF_LO / dt, 5.0 / dt
+    s_lo, s_hi = 0.002 / dt, 0.2 / dt
+    split = sense = None
+    if bump is not None:
+        f, p = psd
+        white = float(np.median(p[(f >= 0.01 / dt) & (f <= 0.05 / dt)]))
+        near = (f >= 0.9 * bump) & (f <= 1.1 * bump)
+        rise = float(np.mean(p[near])) / white if white > 0.0 and near.any() else 1.0
+        split = min(max(bump, lo), hi)
+        sense = min(max(split / (2.0 * np.sqrt(max(rise, 1.0))), s_lo), s_hi)
+    return EffectSpace('internal_lowpass', [
+        Param('split_hz', lo, hi, init=split), Param('sense_hz', s_lo, s_hi, init=sense)],
+        fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}, passes=2)
 
 
 def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,

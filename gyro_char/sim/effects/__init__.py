@@ -3,7 +3,8 @@ Unmodelled effects as composable additions to the bench simulator.
 
 ``base`` holds the hook contract (``Effect``, ``SimContext``) and the registry ``EFFECTS``;
 ``motion``, ``sensor``, ``timing`` and ``vibration`` hold the implementations, which register
-themselves on import; ``catalogue`` builds effects from the CLI syntax ``NAME[:k=v,...]`` or dicts.
+themselves on import (``responses``: the smoothing filters' frequency responses); ``catalogue``
+builds effects from the CLI syntax ``NAME[:k=v,...]`` or dicts.
 """
 # The implementations register themselves in EFFECTS on import.
 from gyro_char.sim.effects import motion, sensor, timing, vibration  # noqa: F401

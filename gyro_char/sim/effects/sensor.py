@@ -13,6 +13,7 @@ from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
 from gyro_char.sim.effects.base import (axis_param, axis_rows, describe_without, Effect, markov,
                                         register, second_order_gm, transient_terms)
+from gyro_char.sim.effects.responses import output_lowpass, output_notch, sense_response
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
@@ -23,31 +24,6 @@ def _add_truth_term(truth, rows, term, value):
         ch = truth['channels'].get(GYRO_CHANNELS[r])
         if ch is not None:
             ch[term] = float(np.hypot(ch[term], value))
-
-
-def output_lowpass(corner_hz: float, order: int, dt: float) -> tuple:
-    """(b, a) of the output-rate Butterworth low-pass (bilinear, corner ``corner_hz``)."""
-    return signal.butter(int(order), corner_hz, fs=1.0 / dt)
-
-
-def output_lowpass_gain2(f, corner_hz: float, order: int, dt: float) -> np.ndarray:
-    """|G(f)|^2 of ``output_lowpass``: 1 / (1 + (tan(pi f dt) / tan(pi fc dt))^(2 order))."""
-    f = np.abs(np.asarray(f, dtype=np.float64))
-    ratio = np.tan(np.pi * np.minimum(f * dt, 0.5 - 1e-12)) / np.tan(np.pi * corner_hz * dt)
-    return 1.0 / (1.0 + ratio ** (2 * int(order)))
-
-
-def output_notch(notch_hz: float, q: float, dt: float) -> tuple:
-    """(b, a) of the output-rate notch (second-order IIR band-stop, -3 dB width notch_hz / q)."""
-    return signal.iirnotch(notch_hz, q, fs=1.0 / dt)
-
-
-def output_notch_gain2(f, notch_hz: float, q: float, dt: float) -> np.ndarray:
-    """|N(f)|^2 of ``output_notch`` at output frequencies ``f``."""
-    b, a = output_notch(notch_hz, q, dt)
-    z = np.exp(-2j * np.pi * np.asarray(f, dtype=np.float64) * dt)
-    h = (b[0] + b[1] * z + b[2] * z * z) / (a[0] + a[1] * z + a[2] * z * z)
-    return np.abs(h) ** 2
 
 
 @register
@@ -70,8 +46,14 @@ class InternalLowpass(Effect):
                '1, so N is unchanged. notch_hz > 0 adds a notch at the output rate (the '
                'band-stop flight controllers and robot IMU drivers put on a motor or '
                'propeller frequency): a second-order IIR of -3 dB width notch_hz / '
-               'notch_q, unity gain elsewhere. Both act on the decimated output before any '
-               'output-stage error (angle quantization, stale samples).')
+               'notch_q, unity gain elsewhere. split_hz > 0 is the rate response of an '
+               'open-loop vibratory gyro operated mode-split (its sense mode split_hz above '
+               'the drive, of half bandwidth sense_hz = f_sense / 2 q_sense): after '
+               'demodulation H(s) = (g s + g^2 + w^2) / ((s + g)^2 + w^2), g = 2 pi '
+               'sense_hz, w = 2 pi split_hz, unity at DC, a peak of about w / 2g near the '
+               'split and a fall as 1 / f beyond, applied in band as it is (one transform of '
+               'the record). All act on the decimated output before any output-stage error '
+               '(angle quantization, stale samples).')
     PARAMS = {'taps': (4.0, 'samples', 'moving-average length N at the internal rate'),
               'stages': (2.0, '-', 'cascaded averages (2: Bartlett triangle, 1: boxcar)'),
               'decimation': (1.0, '-', 'internal samples per output sample'),
@@ -79,7 +61,9 @@ class InternalLowpass(Effect):
               'corner_hz': (0.0, 'Hz', 'output-rate low-pass corner (0: none)'),
               'order': (2.0, '-', 'its Butterworth order (1 or 2)'),
               'notch_hz': (0.0, 'Hz', 'output-rate notch centre (0: none)'),
-              'notch_q': (5.0, '-', 'its quality: centre / -3 dB width')}
+              'notch_q': (5.0, '-', 'its quality: centre / -3 dB width'),
+              'split_hz': (0.0, 'Hz', 'mode-split sense response: sense-drive split (0: none)'),
+              'sense_hz': (5.0, 'Hz', 'its sense mode half bandwidth f_sense / 2 q_sense')}
     output_stage = 0
 
     def check(self):
@@ -90,13 +74,15 @@ class InternalLowpass(Effect):
             raise InputError('internal_lowpass: corner_hz must be >= 0 and order 1 or 2')
         if self.notch_hz < 0.0 or self.notch_q <= 0.0:
             raise InputError('internal_lowpass: notch_hz must be >= 0 and notch_q > 0')
+        if self.split_hz < 0.0 or self.sense_hz <= 0.0:
+            raise InputError('internal_lowpass: split_hz must be >= 0 and sense_hz > 0')
 
     def describe(self):
-        out = describe_without(self, 'corner_hz', 'notch_hz')
-        if 'corner_hz' not in out['params']:
-            del out['params']['order']
-        if 'notch_hz' not in out['params']:
-            del out['params']['notch_q']
+        out = describe_without(self, 'corner_hz', 'notch_hz', 'split_hz')
+        for key, companion in (('corner_hz', 'order'), ('notch_hz', 'notch_q'),
+                               ('split_hz', 'sense_hz')):
+            if key not in out['params']:
+                del out['params'][companion]
         return out
 
     def kernel(self) -> np.ndarray:
@@ -123,6 +109,10 @@ class InternalLowpass(Effect):
         for b, a in filters:
             gyro = self._filter(b, a, gyro)
             accel = self._filter(b, a, accel) if self.accel else accel
+        if self.split_hz:     # the gyro's own sense mode: the accelerometers have none
+            f = np.fft.rfftfreq(gyro.shape[1], ctx.dt)
+            h = sense_response(f, self.split_hz, self.sense_hz)
+            gyro = np.fft.irfft(np.fft.rfft(gyro, axis=1) * h, gyro.shape[1], axis=1)
         return gyro, accel
 
     @staticmethod
