@@ -21,6 +21,7 @@ given the rate's mean, the exact excess of rounding the white noise: ``rounding`
 """
 from collections import OrderedDict
 from dataclasses import dataclass, field
+from functools import partial
 import threading
 from typing import Callable, List, Optional, Sequence, Tuple
 
@@ -28,6 +29,7 @@ from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import rounding, wander
 from gyro_char.diagnosis.holds import GRID, Holds
 from gyro_char.sim.effects.base import transient_terms
+from gyro_char.sim.effects.readout import framed_error_psd
 from gyro_char.sim.effects.responses import output_lowpass_gain2, output_notch_gain2, sense_gain2
 from gyro_char.sim.effects.sensor import DEFAULT_PIVOT_HZ, pivot_scale
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines, WANDER_S
@@ -139,6 +141,8 @@ class ModelSpectrum:
     internal: List[Callable] = field(default_factory=list)   # two-sided, internal rate
     output_white: float = 0.0            # two-sided white PSD added at the output
     angle_var: float = 0.0               # white angle error variance (rad^2), at the output
+    # Angle errors read once a frame and held: their rate errors' two-sided PSDs at the output.
+    framed: List[Callable] = field(default_factory=list)
     lines: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, mean square)
     # (amplitude, tau_s, t0_s): a transient from power-on (t0 0) or from mid-record.
     warmups: List[Tuple[float, float, float]] = field(default_factory=list)
@@ -271,6 +275,8 @@ class ModelSpectrum:
             total *= self.g2(f)
         s_sin = np.sin(np.pi * f * self.dt)
         total += self.output_white + self.angle_var * 4.0 * s_sin * s_sin / self.dt
+        for part in self.framed:
+            total += part(f)
         return 2.0 * total
 
     def deterministic(self, n: int) -> np.ndarray:
@@ -372,7 +378,13 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
                 spec.peaks.append((float(fold(p['freq_hz'], 1.0 / dt)),
                                    p['freq_hz'] / max(p['q'], 0.5)))
         elif name == 'quantization':
-            spec.angle_var += p['step_rad'] ** 2 / (6.0 if p.get('dither', 0.0) else 12.0)
+            frame = int(round(p.get('frame', 1.0)))
+            if frame > 1:
+                spec.framed.append(partial(framed_error_psd, step=p['step_rad'], frame=frame,
+                                           dither=p.get('dither', 0.0), n_white=n_white,
+                                           bias=bias or 0.0, dt=dt))
+            else:
+                spec.angle_var += p['step_rad'] ** 2 / (6.0 if p.get('dither', 0.0) else 12.0)
         elif name == 'vibration':
             lines = vibration_lines(p)
             if p.get('wander_hz', 0.0) > 0.0 and not p.get('spacing_hz', 0.0) > 0.0:

@@ -19,6 +19,7 @@ from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.holds import Holds
+from gyro_char.diagnosis.starts import frame_start
 from gyro_char.diagnosis.static_bands import with_gap_band, with_notch_band
 from gyro_char.diagnosis.static_spaces import STATIC_EFFECTS, static_spaces
 from gyro_char.diagnosis.twins import channel_row, output_step, twin_effects
@@ -118,8 +119,14 @@ def white_level(x: np.ndarray, dt: float) -> float:
 
     The band where a MEMS gyro's white rate noise is cleanest: above the flicker / random-walk
     corner, below where an internal smoothing filter bites; the median ignores a tone in it.
+    Where an angle read once a frame puts its comb of nulls in the PSD
+    (``starts.frame_start``), the PSD's median at the nulls, where the read-out adds nothing.
     """
-    f, p = obs.welch_psd(obs.detrend(x), dt)
+    psd = obs.welch_psd(obs.detrend(x), dt)
+    framed = frame_start(psd, dt)
+    if framed is not None:
+        return framed[2]
+    f, p = psd
     band = (f >= 0.01 / dt) & (f <= 0.05 / dt)
     return float(np.median(p[band]))
 

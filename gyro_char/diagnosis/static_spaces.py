@@ -14,7 +14,7 @@ from gyro_char.diagnosis.band_kurtosis import steady_envelope
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.holds import repeat_excess, repeat_runs, REPEAT_Z
 from gyro_char.diagnosis.spectra import model_spectrum
-from gyro_char.diagnosis.starts import markov_start
+from gyro_char.diagnosis.starts import frame_start, FRAMES, markov_start
 from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
 import numpy as np
 
@@ -155,10 +155,9 @@ def static_spaces(base, x: np.ndarray,
             Param('sigma', *gm_sigma, init=gm_start[0] if gm_start else None),
             Param('tau_s', *gm_tau, init=gm_start[1] if gm_start else None),
             Param('order', 1, 2, integer=True, choice=True)], passes=2),
-        # Plain (angle error correlated when the step is coarse) or dithered (white error).
-        'quantization': EffectSpace('quantization', [
-            Param('step_rad', 0.2 * base.N * np.sqrt(dt), 10.0 * base.N * np.sqrt(dt)),
-            Param('dither', 0, 1, integer=True, choice=True)]),
+        # Plain (angle error correlated when the step is coarse) or dithered (white error);
+        # read once a frame where the PSD shows that comb of nulls (``starts.frame_start``).
+        'quantization': quantization_space(base.N * np.sqrt(dt), frame_start(psd, dt)),
         'temperature_drift': warm_up_space(sig_long, sig_sample, length, warm_sign, onset,
                                            pulse),
         # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
@@ -223,6 +222,27 @@ def split_space(dt: float, psd, bump=None) -> EffectSpace:
     return EffectSpace('internal_lowpass', [
         Param('split_hz', lo, hi, init=split), Param('sense_hz', s_lo, s_hi, init=sense)],
         fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}, passes=2)
+
+
+def quantization_space(inc: float, framed=None) -> EffectSpace:
+    """
+    ``quantization``'s search: the step from 0.2 to 10 per-sample angle increments ``inc``.
+
+    With ``framed`` = (step, frame, floor) from the record, the alternative of an angle read once a
+    frame is started there, its step up to sqrt(frame) times further (a frame's rate error
+    falls on one sample in it).
+    """
+    space = EffectSpace('quantization', [
+        Param('step_rad', 0.2 * inc, 10.0 * inc),
+        Param('dither', 0, 1, integer=True, choice=True)])
+    if framed is None:
+        return space
+    step, frame, _ = framed
+    hi = 10.0 * inc * np.sqrt(FRAMES[-1])
+    return replace(space, alternatives=(EffectSpace('quantization', [
+        Param('step_rad', 0.2 * inc, hi, init=min(max(step, 0.2 * inc), hi)),
+        Param('frame', 2, FRAMES[-1], integer=True, init=frame),
+        Param('dither', 0, 1, integer=True, choice=True)], passes=2),))
 
 
 def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,

@@ -43,6 +43,7 @@ from typing import Any, Callable, Dict, Optional, Tuple
 import zlib
 
 from gyro_char.errors import InputError
+from gyro_char.records import GYRO_CHANNELS
 import numpy as np
 from scipy import signal
 
@@ -232,6 +233,14 @@ def transient_terms(amplitude: float, tau_s: float, rise_s: float = 0.0) -> list
     s_peak = tau_s * rise_s * np.log(tau_s / rise_s) / (tau_s - rise_s)
     peak = np.exp(-s_peak / tau_s) - np.exp(-s_peak / rise_s)
     return [(amplitude / peak, tau_s), (-amplitude / peak, rise_s)]
+
+
+def add_truth_term(truth: dict, rows, term: str, value: float) -> None:
+    """Add ``value`` in quadrature to IEEE term ``term`` of the truth of gyro rows ``rows``."""
+    for r in rows:
+        ch = truth['channels'].get(GYRO_CHANNELS[r])
+        if ch is not None:
+            ch[term] = float(np.hypot(ch[term], value))
 
 
 def describe_without(effect: Effect, *optional: str) -> dict:

@@ -1,5 +1,5 @@
 """
-Sensor effects: smoothing, thermal transient, extra noise processes, quantization.
+Sensor effects: smoothing, thermal transient, extra noise processes.
 
 Axis-selecting parameters: ``axis`` -1 means all three gyro axes, 0/1/2 one of x/y/z
 (``base.axis_rows``). Tones, combs and structural modes are in ``vibration``.
@@ -11,19 +11,13 @@ from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
-from gyro_char.sim.effects.base import (axis_param, axis_rows, describe_without, Effect, markov,
-                                        register, second_order_gm, transient_terms)
+from gyro_char.sim.effects.base import (add_truth_term, axis_param, axis_rows, describe_without,
+                                        Effect, markov, register, second_order_gm,
+                                        transient_terms)
 from gyro_char.sim.effects.responses import output_lowpass, output_notch, sense_response
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
-
-
-def _add_truth_term(truth, rows, term, value):
-    for r in rows:
-        ch = truth['channels'].get(GYRO_CHANNELS[r])
-        if ch is not None:
-            ch[term] = float(np.hypot(ch[term], value))
 
 
 @register
@@ -203,7 +197,7 @@ class _NoiseTerm(Effect):
         return gyro, accel
 
     def update_truth(self, ctx, truth):
-        _add_truth_term(truth, axis_rows(self), self.term, self.params[self.term])
+        add_truth_term(truth, axis_rows(self), self.term, self.params[self.term])
 
 
 def pivot_scale(alpha: float, plain: float, pivot_hz: float, dt: float) -> float:
@@ -352,45 +346,3 @@ class GaussMarkov(Effect):
                 continue
             gyro[r] += self.sigma * markov(w, a)
         return gyro, accel
-
-
-@register
-class AngleQuantization(Effect):
-    """Quantization of the integrated angle (a rate-integrating output): the IEEE Q term."""
-
-    name = 'quantization'
-    summary = 'angle (increment) quantization beyond dH: Allan slope -1, sigma^2 = 3 Q^2 / tau^2'
-    physics = ('The sensor accumulates angle and outputs whole counts of step_rad per sample: '
-               'rate_out = (C_k - C_(k-1)) step / dt with C_k = [theta_k / step]. The angle '
-               'error is uniform and white when the per-sample angle increments spread over at '
-               'least ~step/2 (rate noise N sqrt(dt) >= step / 2; otherwise it is correlated '
-               'and the -1 slope is not formed), so the rate gets the IEEE quantization term '
-               'Q = step / sqrt(12). dither = 1: a fresh uniform dither of one step is added '
-               'to the angle before each read-out, C_k = [theta_k / step + u_k] (body-dithered '
-               'ring-laser gyros, dithered counters): the angle error is then zero-mean and '
-               'white whatever the rate noise, of mean variance step^2 / 6, so Q = step / '
-               'sqrt(6).')
-    PARAMS = {'step_rad': (1.0e-5, 'rad', 'angle quantum'),
-              'axis': axis_param(),
-              'dither': (0.0, '-', '1: one-step uniform dither before each read-out')}
-
-    def check(self):
-        axis_rows(self)
-        if self.step_rad <= 0:
-            raise InputError('quantization: step_rad must be > 0')
-        if self.dither not in (0.0, 1.0):
-            raise InputError('quantization: dither must be 0 or 1')
-
-    def output(self, ctx, gyro, accel):
-        gyro = gyro.copy()
-        rng = self.rng(ctx) if self.dither else None
-        for r in axis_rows(self):
-            theta = np.cumsum(gyro[r]) * ctx.dt / self.step_rad
-            if rng is not None:
-                theta += rng.uniform(0.0, 1.0, theta.size)
-            gyro[r] = np.diff(np.floor(theta), prepend=0.0) * (self.step_rad / ctx.dt)
-        return gyro, accel
-
-    def update_truth(self, ctx, truth):
-        q = self.step_rad / np.sqrt(6.0 if self.dither else 12.0)
-        _add_truth_term(truth, axis_rows(self), 'Q', q)
