@@ -51,6 +51,19 @@ def _ros_env() -> dict:
     return env
 
 
+def _workers(extra: list) -> list:
+    """
+    pytest-xdist options: one worker a core (at most 4), whole files to one worker.
+
+    A file keeps its tests in order and its own ROS domain ids (``test/node_harness.py``), so
+    node tests of different files never share a DDS domain. ``-n`` given by hand wins.
+    """
+    if any(a == '-n' or a.startswith('-n') or a.startswith('--numprocesses') for a in extra):
+        return []
+    n = min(os.cpu_count() or 1, 4)
+    return ['-n', str(n), '--dist', 'loadfile'] if n > 1 else []
+
+
 def main(argv: list) -> int:
     if not argv or argv[0] not in ('demo', 'test'):
         print('usage: python3 tasks.py {demo|test} [extra args]', file=sys.stderr)
@@ -60,7 +73,7 @@ def main(argv: list) -> int:
     if task == 'demo':
         cmd = [str(VENV / 'bin' / 'gyro-char'), 'demo'] + extra
     else:
-        cmd = [str(PY), '-m', 'pytest', '-q', str(ROOT / 'test')] + extra
+        cmd = [str(PY), '-m', 'pytest', '-q', str(ROOT / 'test')] + _workers(extra) + extra
     rc = subprocess.run(cmd, cwd=ROOT, env=_ros_env()).returncode
     if task == 'test' and rc == 5:
         # pytest's 'no tests collected' must never pass as green.
