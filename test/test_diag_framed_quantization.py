@@ -9,11 +9,7 @@ from gyro_char.sim.effects import EFFECTS, SimContext
 import numpy as np
 import pytest
 from scipy import signal
-
-DT = 0.01
-LSB = 0.05 * np.pi / 180.0
-N_ARW = 2.4 * np.pi / 180.0 / 60.0
-BASE = static.StaticBaseline(N=N_ARW, bias=0.0, drift=0.0, lsb=LSB, dt=DT)
+from static_twin_base import BASE, DT, LSB, N_ARW
 
 
 def framed(step, frame, dither=1.0):

@@ -9,11 +9,8 @@ from gyro_char.sim.effects.responses import output_notch, output_notch_gain2
 import numpy as np
 import pytest
 from scipy import signal
+from static_twin_base import BASE, DT
 
-DT = 0.01
-LSB = 0.05 * np.pi / 180.0
-N_ARW = 2.4 * np.pi / 180.0 / 60.0
-BASE = static.StaticBaseline(N=N_ARW, bias=0.0, drift=0.0, lsb=LSB, dt=DT)
 SPAN = (0.01, 50.0)
 
 
