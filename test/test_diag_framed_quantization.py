@@ -1,6 +1,7 @@
 """An angle read once a frame (``quantization:frame=M``): simulator, closed form, start, fit."""
 from gyro_char.diagnosis import expected, spread, static, static_expect
 from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis.band_kurtosis import non_gaussian_bands
 from gyro_char.diagnosis.engine import run
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.diagnosis.starts import frame_start
@@ -101,3 +102,16 @@ def test_a_framed_read_out_is_named_quantization_with_its_frame():
     fitted = d.refined['params']['quantization']
     assert fitted.get('frame') == 10.0
     assert d.final_gap < 0.1 * d.baseline_gap
+
+
+def test_band_kurtosis_says_a_framed_read_out_is_not_gaussian_where_it_is_selected():
+    # Sparse coarse steps: every 5 Hz band's excess kurtosis near +3 (the check's expectation
+    # is Gaussian); with the read-out in the model the warning names it as a possible cause.
+    effects = [framed(2e-3, 10, dither=0.0)]
+    x = static.simulate_twin(BASE, 2 ** 18, effects, 5)
+    plain = non_gaussian_bands(x, DT, model_spectrum(N_ARW, LSB, DT, []))
+    named = non_gaussian_bands(x, DT, model_spectrum(N_ARW, LSB, DT, effects))
+    assert len(plain) == len(named) >= 5
+    assert all(b['excess_kurtosis'] > 1.0 for b in named)
+    assert all('read-out once a frame' in b['meaning'] for b in named)
+    assert not any('read-out once a frame' in b['meaning'] for b in plain)

@@ -12,8 +12,10 @@ spectrum like a mode, but keeps a steady envelope; the fourth moment tells the t
 (``vibration``'s ``wander_hz``: a share q of its power in a band adds (1.5 q - 3 q^2) P^2 to
 the band's fourth cumulant, exact for slow wander).
 Not modelled: ``stale_samples``' holds, a random map whose output is a Gaussian scale
-mixture with a positive excess kurtosis (+0.3 near Nyquist at p = 0.3, isolated holds); the
-expectation stays the Gaussian one there.
+mixture with a positive excess kurtosis (+0.3 near Nyquist at p = 0.3, isolated holds), and
+an angle read once a frame (``quantization:frame``), whose error falls on one sample in M at
+a fixed phase (a coarse 10-sample frame: +2.6 to +3.2 in 5 Hz bands at 100 Hz, -0.6 to +0.6
+at 333 Hz); the expectation stays the Gaussian one there, and a departing band says so.
 
 It is a check beside the gap, not a block of it (``non_gaussian_bands``): scored as a block
 it named no blind shape better and made the gaps of non-Gaussian shapes unexplainable
@@ -227,6 +229,9 @@ def non_gaussian_bands(x: np.ndarray, dt: float, spec) -> list:
                    if k > m else
                    'a steadier envelope than the model: a line of constant amplitude (a '
                    'machine, a self-oscillation) where the model has noise')
+        if spec.holds is not None or spec.framed:
+            meaning += ('; or the holds or the read-out once a frame of the selected model, '
+                        'which are not Gaussian either (their kurtosis is not modelled)')
         out.append({'range_hz': [float(lo), float(hi)], 'excess_kurtosis': float(k),
                     'model': float(m), 'model_sd': float(s), 'meaning': meaning})
     return out
