@@ -58,7 +58,7 @@ def _workers(extra: list) -> list:
     A file keeps its tests in order and its own ROS domain ids (``test/node_harness.py``), so
     node tests of different files never share a DDS domain. ``-n`` given by hand wins.
     """
-    if any(a == '-n' or a.startswith('-n') or a.startswith('--numprocesses') for a in extra):
+    if any(a.startswith(('-n', '--numprocesses')) for a in extra):
         return []
     n = min(os.cpu_count() or 1, 4)
     return ['-n', str(n), '--dist', 'loadfile'] if n > 1 else []

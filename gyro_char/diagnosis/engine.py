@@ -268,7 +268,8 @@ def run(problem: Problem, *, repeats: int = 8, seed: int = 1, max_steps: int = 3
         nuisance = best_nuisance
         steps.append({'effect': best, 'params': _jsonable(params), 'gap_after': ev.gap,
                       **({'criterion': scores} if scores else {}),
-                      **({'own_scatter': {'criterion_before': before}} if before else {})})
+                      **({'own_scatter': {'criterion_before': before}}
+                         if before is not None else {})})
         current = ev
     greedy_gap = current.gap
     dropped = []

@@ -125,6 +125,15 @@ def welch_psd(x: np.ndarray, dt: float) -> Tuple[np.ndarray, np.ndarray]:
     return signal.welch(x - x.mean(), fs=1.0 / dt, nperseg=welch_segment(x.size))
 
 
+def white_band(f: np.ndarray, dt: float) -> np.ndarray:
+    """
+    Mask of the frequencies ``f`` in 1-5 % of the sample rate: where white rate noise is read.
+
+    Above the flicker / random-walk corner, below where an internal smoothing filter bites.
+    """
+    return (f >= 0.01 / dt) & (f <= 0.05 / dt)
+
+
 def running_median(p: np.ndarray) -> np.ndarray:
     """Return the PSD's running median over ~1/10 of the band: the floor peaks stand on."""
     return ndimage.median_filter(p, size=max(31, (p.size // 10) | 1), mode='nearest')

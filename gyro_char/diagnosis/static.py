@@ -115,20 +115,19 @@ def simulate_twin(base: StaticBaseline, n: int, effects: Sequence, seed: int,
 
 def white_level(x: np.ndarray, dt: float) -> float:
     """
-    Return the median Welch PSD of the detrended record in 0.01-0.05 of the sample rate.
+    Return the median Welch PSD of the detrended record in the white band.
 
-    The band where a MEMS gyro's white rate noise is cleanest: above the flicker / random-walk
-    corner, below where an internal smoothing filter bites; the median ignores a tone in it.
-    Where an angle read once a frame puts its comb of nulls in the PSD
-    (``starts.frame_start``), the PSD's median at the nulls, where the read-out adds nothing.
+    The band is 1-5 % of the rate (``observables.white_band``), where a MEMS gyro's white
+    rate noise is cleanest; the median ignores a tone in it. Where an angle read once a frame
+    puts its comb of nulls in the PSD (``starts.frame_start``), the PSD's median at the
+    nulls, where the read-out adds nothing.
     """
     psd = obs.welch_psd(obs.detrend(x), dt)
     framed = frame_start(psd, dt)
     if framed is not None:
         return framed[2]
     f, p = psd
-    band = (f >= 0.01 / dt) & (f <= 0.05 / dt)
-    return float(np.median(p[band]))
+    return float(np.median(p[obs.white_band(f, dt)]))
 
 
 def calibrate_n(base: StaticBaseline, x: np.ndarray, channel: str,

@@ -101,7 +101,7 @@ def calibrate_n(base, x: np.ndarray):
     g = expected.grids(lay.n, lay.dt)
     noise, _ = expected.welch_expected(model_spectrum(base.N, base.lsb, base.dt, []), g)
     f = np.arange(noise.size) / (g.nps * g.dt)
-    band = (f >= 0.01 / base.dt) & (f <= 0.05 / base.dt)
+    band = obs.white_band(f, base.dt)
     med = float(expected_tone.tone_draws(noise.size, round(g.k_eff, 1))[2])
     white_out = base.lsb ** 2 / 12.0 * base.dt * 2.0
     model_white = float(np.median(noise[band])) - white_out
@@ -119,7 +119,7 @@ def white_band_spread(n: int, dt: float) -> float:
     """Relative standard error of N from the median Welch level in 1-5 % of the rate."""
     g = expected.grids(n, dt)
     f = np.arange(g.nps // 2 + 1) / (g.nps * dt)
-    bins = int(np.count_nonzero((f >= 0.01 / dt) & (f <= 0.05 / dt)))
+    bins = int(np.count_nonzero(obs.white_band(f, dt)))
     # Median of ~bins/2 independent chi-square(2 k_eff) bins (Hann neighbours correlate):
     # relative spread 1.25 sqrt(1 / (k_eff bins / 2)); N goes as its square root.
     return 0.5 * 1.25 / np.sqrt(max(g.k_eff * bins / 2.0, 1.0))

@@ -214,7 +214,7 @@ def split_space(dt: float, psd, bump=None) -> EffectSpace:
     split = sense = None
     if bump is not None:
         f, p = psd
-        white = float(np.median(p[(f >= 0.01 / dt) & (f <= 0.05 / dt)]))
+        white = float(np.median(p[obs.white_band(f, dt)]))
         near = (f >= 0.9 * bump) & (f <= 1.1 * bump)
         rise = float(np.mean(p[near])) / white if white > 0.0 and near.any() else 1.0
         split = min(max(bump, lo), hi)
@@ -228,9 +228,9 @@ def quantization_space(inc: float, framed=None) -> EffectSpace:
     """
     ``quantization``'s search: the step from 0.2 to 10 per-sample angle increments ``inc``.
 
-    With ``framed`` = (step, frame, floor) from the record, the alternative of an angle read once a
-    frame is started there, its step up to sqrt(frame) times further (a frame's rate error
-    falls on one sample in it).
+    With ``framed`` = (step, frame, floor) from the record (``starts.frame_start``), the
+    alternative of an angle read once a frame is started there, its step up to sqrt(frame)
+    times further (a frame's rate error falls on one sample in it).
     """
     space = EffectSpace('quantization', [
         Param('step_rad', 0.2 * inc, 10.0 * inc),

@@ -27,8 +27,9 @@ class AngleQuantization(Effect):
                'sqrt(6). frame = M > 1: the whole count is read only every M samples (a coarse '
                'absolute counter re-anchored once a frame, exact increments in between: '
                'keyframe-and-delta angle telemetry): the angle error is held for the frame, '
-               'the rate error falls on one sample in M, its PSD 8 var sin^2(pi f M dt) / '
-               '(M dt) with nulls every 1 / (M dt); Q is unchanged at tau >= M dt.')
+               'the rate error falls on one sample in M, with nulls every 1 / (M dt) (its PSD '
+               '8 var sin^2(pi f M dt) / (M dt) where the error is white from frame to frame; '
+               'framed_error_psd); Q is unchanged at tau >= M dt.')
     PARAMS = {'step_rad': (1.0e-5, 'rad', 'angle quantum'),
               'axis': axis_param(),
               'dither': (0.0, '-', '1: one-step uniform dither before each read-out'),

@@ -27,7 +27,10 @@ def output_notch(notch_hz: float, q: float, dt: float) -> tuple:
 
 def output_notch_gain2(f, notch_hz: float, q: float, dt: float) -> np.ndarray:
     """|N(f)|^2 of ``output_notch`` at output frequencies ``f``."""
-    return biquad_gain2(*output_notch(notch_hz, q, dt), f, dt)
+    b, a = output_notch(notch_hz, q, dt)
+    z = np.exp(-2j * np.pi * np.asarray(f, dtype=np.float64) * dt)
+    h = (b[0] + b[1] * z + b[2] * z * z) / (a[0] + a[1] * z + a[2] * z * z)
+    return np.abs(h) ** 2
 
 
 def sense_response(f, split_hz: float, sense_hz: float) -> np.ndarray:
@@ -48,10 +51,3 @@ def sense_response(f, split_hz: float, sense_hz: float) -> np.ndarray:
 def sense_gain2(f, split_hz: float, sense_hz: float) -> np.ndarray:
     """|H(f)|^2 of ``sense_response``."""
     return np.abs(sense_response(f, split_hz, sense_hz)) ** 2
-
-
-def biquad_gain2(b, a, f, dt: float) -> np.ndarray:
-    """|H(f)|^2 of a second-order digital filter (b, a) at output frequencies ``f``."""
-    z = np.exp(-2j * np.pi * np.asarray(f, dtype=np.float64) * dt)
-    h = (b[0] + b[1] * z + b[2] * z * z) / (a[0] + a[1] * z + a[2] * z * z)
-    return np.abs(h) ** 2
