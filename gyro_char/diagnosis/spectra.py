@@ -13,11 +13,11 @@ stage has an exact discrete-time PSD, so the twin's output PSD is
 output-rate low-pass and notch, if any, their delay of a slow warm-up neglected). Tones are lines,
 folded the same way, but a tone whose frequency wanders is a noise part (``wander``); a
 warm-up is a deterministic mean term. Stale samples (an output sample repeating the previous
-one) act last, on the whole output (``holds.Holds``). ``ModelSpectrum`` holds the result
-for one model; every observable's expectation is a linear functional of it
-(``gyro_char.diagnosis.expected``). The output step is taken as white rounding noise
-(lsb^2 / 12 per sample, exact while the per-sample noise exceeds about half a step; below,
-given the rate's mean, the exact excess of rounding the white noise: ``rounding``).
+one) act last, on the whole output (``holds.Holds``; those a glitch gate selects: ``gate``).
+``ModelSpectrum`` holds the result for one model; every observable's expectation is a linear
+functional of it (``gyro_char.diagnosis.expected``). The output step is taken as white
+rounding noise (lsb^2 / 12 per sample, exact while the per-sample noise exceeds about half a
+step; below, given the rate's mean, the exact excess of rounding the white noise: ``rounding``).
 """
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -27,7 +27,8 @@ from typing import Callable, List, Optional, Sequence, Tuple
 
 from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import rounding, wander
-from gyro_char.diagnosis.holds import GRID, Holds
+from gyro_char.diagnosis.gate import hold_model
+from gyro_char.diagnosis.holds import GRID
 from gyro_char.sim.effects.base import transient_terms
 from gyro_char.sim.effects.readout import framed_error_psd
 from gyro_char.sim.effects.responses import output_lowpass_gain2, output_notch_gain2, sense_gain2
@@ -147,7 +148,7 @@ class ModelSpectrum:
     # (amplitude, tau_s, t0_s): a transient from power-on (t0 0) or from mid-record.
     warmups: List[Tuple[float, float, float]] = field(default_factory=list)
     peaks: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, width) to resolve
-    holds: Optional[Holds] = None        # stale samples; ``lines`` are then the held ones
+    holds: Optional[object] = None       # ``Holds`` or ``GateHolds``; ``lines`` then held
     unheld_lines: List[Tuple[float, float]] = field(default_factory=list)
     # Noise parts with a constant envelope (a wandering tone: a line's fourth moment, a
     # noise's spectrum; ``band_kurtosis``): (f_out, mean square, wander_hz, wander_s, index
@@ -357,10 +358,11 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
             if p.get('split_hz', 0.0):
                 split = (p['split_hz'], p.get('sense_hz', 5.0))
         elif name == 'stale_samples':
-            holds = Holds.from_params(p)
+            holds = p
     h = moving_average_kernel(taps, stages)
     gain = float(np.sqrt(decim * np.sum([h[r::decim].sum() ** 2 for r in range(decim)])))
     if holds is not None:
+        holds = hold_model(holds, n_white, dt, gain)
         gain *= holds.gain()
     dt_i = dt / decim
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,

@@ -18,7 +18,7 @@ from typing import Optional, Sequence
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.fit import EffectSpace, Param
-from gyro_char.diagnosis.holds import Holds
+from gyro_char.diagnosis.gate import hold_model
 from gyro_char.diagnosis.starts import frame_start
 from gyro_char.diagnosis.static_bands import with_gap_band, with_notch_band
 from gyro_char.diagnosis.static_spaces import STATIC_EFFECTS, static_spaces
@@ -87,8 +87,9 @@ def twin_config(base: StaticBaseline, channel: str, effects: Sequence = ()) -> B
         if name == 'internal_lowpass':
             lp = EFFECTS[name](**params)
             gain *= lp.noise_gain(int(lp.decimation))
-        elif name == 'stale_samples':
-            gain *= Holds.from_params(params).gain()
+    for name, params in effects:
+        if name == 'stale_samples':
+            gain *= hold_model(params, base.N, base.dt, gain).gain()
     axis = AXES[channel_row(channel)]
     overrides = {
         'gyro': {'static_rate_hz': 1.0 / base.dt, 'output_step': base.lsb,

@@ -12,6 +12,7 @@ from typing import List, Sequence
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.band_kurtosis import steady_envelope
 from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.gate import gate_for_share, GateHolds
 from gyro_char.diagnosis.holds import repeat_excess, repeat_runs, REPEAT_Z
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.diagnosis.starts import frame_start, FRAMES, markov_start
@@ -190,12 +191,29 @@ def static_spaces(base, x: np.ndarray,
         spaces['stale_samples'] = EffectSpace('stale_samples', [
             p_param, Param('isolated', 0, 1, integer=True, choice=True)])
         # Runs of holds (a frozen register): where most exact repeats come in runs of two or
-        # more, an alternative start at their mean length.
+        # more, an alternative start at their mean length. Where the share is measured, the
+        # holds a glitch gate selects are the other alternative (``gate_space``).
+        others = [gate_space(p_lo, p_hi, start, base)] if excess_se > 0.0 else []
         length, share = repeat_runs(x, base.lsb)
         if length >= 2.0 and share > RUN_SHARE:
-            spaces['stale_samples'].alternatives = (EffectSpace('stale_samples', [
-                p_param, Param('run', 1.5, RUN_MAX, init=min(length, RUN_MAX))]),)
+            others.append(EffectSpace('stale_samples', [
+                p_param, Param('run', 1.5, RUN_MAX, init=min(length, RUN_MAX))]))
+        spaces['stale_samples'].alternatives = tuple(others)
     return [spaces[k] for k in names if k in spaces]
+
+
+def gate_space(p_lo: float, p_hi: float, start: float, base) -> EffectSpace:
+    """
+    ``stale_samples``' glitch gate: the gates whose held shares span ``p_lo`` to ``p_hi``.
+
+    The gate is in rad/s; the white noise it sees is the baseline's N less the gain the gate
+    itself gives it in the white band (``gate.GateHolds.gain``), taken at the start's share.
+    """
+    g0 = gate_for_share(start)
+    sd = base.N / np.sqrt(base.dt) / GateHolds(g0, 1.0).gain()
+    lo, hi = gate_for_share(p_hi) * sd, gate_for_share(p_lo) * sd
+    return EffectSpace('stale_samples', [Param('gate', lo, hi, init=g0 * sd)],
+                       fixed={'p': 0.0})
 
 
 def split_space(dt: float, psd, bump=None) -> EffectSpace:

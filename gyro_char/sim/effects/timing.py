@@ -143,19 +143,32 @@ class StaleSamples(Effect):
                'sensor is busy, the share of held samples still p). On white '
                'rate noise the lag-m correlation is p^|m| (independent) or p at lag 1 only '
                '(isolated), the variance kept: the PSD tilts up at low frequency and down at '
-               'Nyquist. On a swing run the holds average to a delay of about p dt.')
+               'Nyquist. On a swing run the holds average to a delay of about p dt. With '
+               'gate > 0 the holds are chosen by the data instead: a driver guarding against '
+               'bus glitches keeps its last gyro output wherever the new one jumps by more '
+               'than the gate, so the largest steps are held back (the share follows from '
+               'the gate and the noise; the variance drops).')
     PARAMS = {'p': (0.05, '-', 'probability that a sample repeats the previous one'),
               'isolated': (0.0, '-', '1: never two holds in a row (p < 0.5), 0: independent'),
               'run': (0.0, 'samples', 'mean length of a run of holds (>= 1; 0: independent '
-                                      'or isolated holds as set by isolated)')}
+                                      'or isolated holds as set by isolated)'),
+              'gate': (0.0, 'rad/s', 'glitch gate: each gyro axis republishes its last output '
+                                     'wherever the new sample differs from it by more than '
+                                     'this (p, isolated and run then unused); 0: off')}
 
     def check(self):
+        if not self.gate >= 0.0:
+            raise InputError('stale_samples: gate >= 0 (rad/s)')
+        if self.gate:
+            return
         if not 0.0 <= self.p < (0.5 if self.isolated else 1.0):
             raise InputError('stale_samples: p in [0, 1), below 0.5 with isolated = 1')
         if self.run and (self.run < 1.0 or self.p > self.run / (1.0 + self.run)):
             raise InputError('stale_samples: run >= 1 and p <= run / (1 + run)')
 
     def output(self, ctx, gyro, accel):
+        if self.gate:
+            return np.vstack([gated(row, self.gate) for row in gyro]), accel
         n = gyro.shape[1]
         rng = self.rng(ctx)
         if self.run:
@@ -186,3 +199,23 @@ class StaleSamples(Effect):
             lengths = np.r_[lengths, draw()]
         flags = np.repeat(np.tile([False, True], lengths.size // 2), lengths)[:n]
         return flags
+
+
+def gated(x: np.ndarray, gate: float) -> np.ndarray:
+    """
+    Return ``x`` through a glitch gate: the last output kept while a sample is beyond ``gate``.
+
+    y_k = x_k if |x_k - y_(k-1)| <= gate, else y_(k-1). Only the samples after a step larger
+    than the gate can start a hold, so the loop runs over the holds alone.
+    """
+    y = np.array(x, dtype=np.float64)
+    starts = np.flatnonzero(np.abs(np.diff(y)) > gate) + 1
+    k = 0
+    for j in starts:
+        if j < k:                       # inside a hold already handled
+            continue
+        ref, k = y[j - 1], j
+        while k < y.size and abs(y[k] - ref) > gate:
+            y[k] = ref
+            k += 1
+    return y
