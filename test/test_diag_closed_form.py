@@ -86,6 +86,11 @@ CASES = {
                                ('internal_lowpass', {'taps': 1.0, 'stages': 1.0,
                                                      'decimation': 1.0, 'split_hz': 30.0,
                                                      'sense_hz': 7.5})],
+    # An interleaved front end's memory (three converters in turn) under a tone and holds.
+    'interleaved_memory_under_tone': [('vibration', {'amplitude': 3e-3, 'freq_hz': 16.1}),
+                                      ('internal_lowpass', {'taps': 1.0, 'stages': 1.0,
+                                                            'decimation': 1.0, 'memory': 0.4,
+                                                            'interleave': 3.0})],
 }
 
 

@@ -10,7 +10,8 @@ stage has an exact discrete-time PSD, so the twin's output PSD is
     S_out(f) = |G(f)|^2 sum_r |H(f + r fs)|^2 S_int(f + r fs) + S_q(f) + S_lsb(f),   r = 0..D-1
 
 (decimation folds the D images of the internal band; two-sided, per Hz; G is the sensor's
-output-rate low-pass and notch, if any, their delay of a slow warm-up neglected). Tones are lines,
+output-rate filters, if any: low-pass, notch, mode-split response, interleaved memory, their
+delay of a slow warm-up neglected). Tones are lines,
 folded the same way, but a tone whose frequency wanders is a noise part (``wander``); a
 warm-up is a deterministic mean term. Stale samples (an output sample repeating the previous
 one) act last, on the whole output (``holds.Holds``; those a glitch gate selects: ``gate``).
@@ -31,7 +32,8 @@ from gyro_char.diagnosis.gate import hold_model
 from gyro_char.diagnosis.holds import GRID
 from gyro_char.sim.effects.base import transient_terms
 from gyro_char.sim.effects.readout import framed_error_psd
-from gyro_char.sim.effects.responses import output_lowpass_gain2, output_notch_gain2, sense_gain2
+from gyro_char.sim.effects.responses import (interleaved_memory_gain2, output_lowpass_gain2,
+                                             output_notch_gain2, sense_gain2)
 from gyro_char.sim.effects.sensor import DEFAULT_PIVOT_HZ, pivot_scale
 from gyro_char.sim.effects.vibration import resonance_coefficients, vibration_lines, WANDER_S
 import numpy as np
@@ -155,13 +157,15 @@ class ModelSpectrum:
     # in ``internal``).
     envelopes: List[tuple] = field(default_factory=list)
     # The output-rate filters (``internal_lowpass`` corner_hz, order; notch_hz, notch_q;
-    # the mode-split sense response split_hz, sense_hz): 0 for none.
+    # the mode-split sense response split_hz, sense_hz; memory, interleave): 0 for none.
     corner_hz: float = 0.0
     order: int = 0
     notch_hz: float = 0.0
     notch_q: float = 0.0
     split_hz: float = 0.0
     sense_hz: float = 0.0
+    memory: float = 0.0                  # an interleaved front end's memory, and its L
+    interleave: int = 2
     _hold_terms: dict = field(default_factory=dict, repr=False)
 
     def refine(self, nu: np.ndarray, points: int = 400) -> np.ndarray:
@@ -198,7 +202,7 @@ class ModelSpectrum:
     @property
     def filtered(self) -> bool:
         """Whether an output-rate filter is set (``g2`` is not 1)."""
-        return bool(self.corner_hz or self.notch_hz or self.split_hz)
+        return bool(self.corner_hz or self.notch_hz or self.split_hz or self.memory)
 
     def g2(self, f) -> np.ndarray:
         """|G(f)|^2 of the output-rate filters at output frequencies ``f``."""
@@ -209,6 +213,8 @@ class ModelSpectrum:
             out = out * output_notch_gain2(f, self.notch_hz, self.notch_q, self.dt)
         if self.split_hz:
             out = out * sense_gain2(f, self.split_hz, self.sense_hz)
+        if self.memory:
+            out = out * interleaved_memory_gain2(f, self.memory, self.interleave, self.dt)
         return out
 
     def images(self, f: np.ndarray) -> list:
@@ -347,7 +353,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
     or encoder effect).
     """
     decim, taps, stages, holds, corner, order = 1, 1, 1, None, 0.0, 0
-    notch, split = (0.0, 0.0), (0.0, 0.0)
+    notch, split, memory = (0.0, 0.0), (0.0, 0.0), (0.0, 2)
     for name, p in effects:
         if name == 'internal_lowpass':
             decim = max(decim, int(p.get('decimation', 1.0)))
@@ -357,6 +363,8 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
                 notch = (p['notch_hz'], p.get('notch_q', 5.0))
             if p.get('split_hz', 0.0):
                 split = (p['split_hz'], p.get('sense_hz', 5.0))
+            if p.get('memory', 0.0):
+                memory = (p['memory'], int(p.get('interleave', 2.0)))
         elif name == 'stale_samples':
             holds = p
     h = moving_average_kernel(taps, stages)
@@ -369,7 +377,8 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
                          white_int=(n_white / gain) ** 2,
                          output_white=_rounding(n_white, lsb, dt, bias) * dt, corner_hz=corner,
                          order=order if corner else 0, notch_hz=notch[0], notch_q=notch[1],
-                         split_hz=split[0], sense_hz=split[1])
+                         split_hz=split[0], sense_hz=split[1], memory=memory[0],
+                         interleave=memory[1])
     for name, p in effects:
         if name not in CLOSED_FORM:
             raise ValueError(f'effect {name} has no closed-form static spectrum')

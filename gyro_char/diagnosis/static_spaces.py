@@ -35,6 +35,8 @@ SHARE_SLACK = 1.5
 # The output-rate low-pass's corner, in cycles per sample: from 2 % of the rate (below, it is
 # a strong smoother the averages or a Gauss-Markov process describe) to just under Nyquist.
 DLPF_LO, DLPF_HI = 0.02, 0.4995
+# Interleaved converters searched (``memory_space``): 2 (double sampling) to this many.
+INTERLEAVE_MAX = 4
 
 
 # How far (in robust sds of the record's 1/64-length moving average) its largest excursion
@@ -123,14 +125,14 @@ def static_spaces(base, x: np.ndarray,
         # output-rate Butterworth low-pass (a DLPF) of order 1 or 2: the averages, decimated,
         # make whole steps of correlation, a gentle roll-off below Nyquist is the DLPF's. Or
         # a mode-split sense channel's response (a peak near the split, then a fall): started
-        # at the PSD's broad bump where it has one.
+        # at the PSD's broad bump where it has one. Or an interleaved front end's memory.
         'internal_lowpass': EffectSpace('internal_lowpass', [
             Param('taps', 2, 32, integer=True), Param('stages', 1, 3, integer=True, choice=True)],
             fixed={'decimation': 8.0}, alternatives=(EffectSpace('internal_lowpass', [
                 Param('corner_hz', DLPF_LO / dt, DLPF_HI / dt, nyquist=0.5 / dt),
                 Param('order', 1, 2, integer=True, choice=True)],
                 fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),
-                split_space(dt, psd, bump)), refit_all=True),
+                split_space(dt, psd, bump), memory_space(y)), refit_all=True),
         # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
         # output Nyquist frequency, means no corner): B first without a corner, then the
         # corner, then both again (a corner moves the best B; refits near it: one pass). The
@@ -214,6 +216,26 @@ def gate_space(p_lo: float, p_hi: float, start: float, base) -> EffectSpace:
     lo, hi = gate_for_share(p_hi) * sd, gate_for_share(p_lo) * sd
     return EffectSpace('stale_samples', [Param('gate', lo, hi, init=g0 * sd)],
                        fixed={'p': 0.0})
+
+
+def memory_space(y: np.ndarray) -> EffectSpace:
+    """
+    ``internal_lowpass``' interleaved memory: the share kept and the converters in turn.
+
+    On white noise the memory r of L interleaved converters correlates the samples L apart by
+    r and no nearer ones, so the search starts at the record's largest correlation at lags 2
+    to ``INTERLEAVE_MAX`` (one converter's memory is the first-order DLPF); r from half the
+    correlation's standard error 1 / sqrt(n) to 0.9.
+    """
+    u = y - y.mean()
+    var = float(np.dot(u, u))
+    rho = [float(np.dot(u[:-k], u[k:])) / var if var > 0.0 else 0.0
+           for k in range(2, INTERLEAVE_MAX + 1)]
+    lo, hi = 0.5 / np.sqrt(y.size), 0.9
+    return EffectSpace('internal_lowpass', [
+        Param('memory', lo, hi, init=min(max(max(rho), lo), hi)),
+        Param('interleave', 2, INTERLEAVE_MAX, integer=True, choice=True)],
+        fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0})
 
 
 def split_space(dt: float, psd, bump=None) -> EffectSpace:

@@ -33,6 +33,25 @@ def output_notch_gain2(f, notch_hz: float, q: float, dt: float) -> np.ndarray:
     return np.abs(h) ** 2
 
 
+def interleaved_memory(memory: float, interleave: int) -> tuple:
+    """
+    (b, a) of an interleaved front end's memory: y_k = (1 - r) x_k + r y_(k-L).
+
+    L converters (or sampling capacitors) take the samples in turn, and each keeps a share r
+    of what it held at its last turn (incomplete reset): L interleaved one-poles, DC gain 1.
+    """
+    a = np.zeros(int(interleave) + 1)
+    a[0], a[-1] = 1.0, -memory
+    return np.array([1.0 - memory]), a
+
+
+def interleaved_memory_gain2(f, memory: float, interleave: int, dt: float) -> np.ndarray:
+    """|M(f)|^2 of ``interleaved_memory``: (1 - r)^2 / (1 - 2 r cos(2 pi f L dt) + r^2)."""
+    r = float(memory)
+    s = np.sin(np.pi * np.asarray(f, dtype=np.float64) * int(interleave) * dt)
+    return (1.0 - r) ** 2 / ((1.0 - r) ** 2 + 4.0 * r * s * s)
+
+
 def sense_response(f, split_hz: float, sense_hz: float) -> np.ndarray:
     """
     Complex rate response of a mode-split sense channel at frequencies ``f`` (Hz).

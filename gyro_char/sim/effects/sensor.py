@@ -14,7 +14,8 @@ from gyro_char.sim import noise_gen
 from gyro_char.sim.effects.base import (add_truth_term, axis_param, axis_rows, describe_without,
                                         Effect, markov, register, second_order_gm,
                                         transient_terms)
-from gyro_char.sim.effects.responses import output_lowpass, output_notch, sense_response
+from gyro_char.sim.effects.responses import (interleaved_memory, output_lowpass, output_notch,
+                                             sense_response)
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
@@ -46,7 +47,12 @@ class InternalLowpass(Effect):
                'demodulation H(s) = (g s + g^2 + w^2) / ((s + g)^2 + w^2), g = 2 pi '
                'sense_hz, w = 2 pi split_hz, unity at DC, a peak of about w / 2g near the '
                'split and a fall as 1 / f beyond, applied in band as it is (one transform of '
-               'the record). All act on the decimated output before any output-stage error '
+               'the record). memory > 0 is the memory of an interleaved front end: '
+               'interleave converters (or the two capacitors of a double-sampled one) take '
+               'the samples in turn and each keeps a share memory of its last charge, y_k = '
+               '(1 - r) x_k + r y_(k-L): DC gain 1, dips at odd multiples of the rate / 2L, '
+               'white noise correlated at lags L, 2L, .. only. All act on the decimated '
+               'output before any output-stage error '
                '(angle quantization, stale samples).')
     PARAMS = {'taps': (4.0, 'samples', 'moving-average length N at the internal rate'),
               'stages': (2.0, '-', 'cascaded averages (2: Bartlett triangle, 1: boxcar)'),
@@ -57,7 +63,9 @@ class InternalLowpass(Effect):
               'notch_hz': (0.0, 'Hz', 'output-rate notch centre (0: none)'),
               'notch_q': (5.0, '-', 'its quality: centre / -3 dB width'),
               'split_hz': (0.0, 'Hz', 'mode-split sense response: sense-drive split (0: none)'),
-              'sense_hz': (5.0, 'Hz', 'its sense mode half bandwidth f_sense / 2 q_sense')}
+              'sense_hz': (5.0, 'Hz', 'its sense mode half bandwidth f_sense / 2 q_sense'),
+              'memory': (0.0, '-', 'interleaved front end: share of charge kept (0: none)'),
+              'interleave': (2.0, '-', 'its converters taking the samples in turn (>= 1)')}
     output_stage = 0
 
     def check(self):
@@ -70,11 +78,15 @@ class InternalLowpass(Effect):
             raise InputError('internal_lowpass: notch_hz must be >= 0 and notch_q > 0')
         if self.split_hz < 0.0 or self.sense_hz <= 0.0:
             raise InputError('internal_lowpass: split_hz must be >= 0 and sense_hz > 0')
+        if not 0.0 <= self.memory < 1.0 or self.interleave < 1 \
+                or self.interleave != int(self.interleave):
+            raise InputError('internal_lowpass: memory in [0, 1), interleave a whole number '
+                             '>= 1')
 
     def describe(self):
-        out = describe_without(self, 'corner_hz', 'notch_hz', 'split_hz')
+        out = describe_without(self, 'corner_hz', 'notch_hz', 'split_hz', 'memory')
         for key, companion in (('corner_hz', 'order'), ('notch_hz', 'notch_q'),
-                               ('split_hz', 'sense_hz')):
+                               ('split_hz', 'sense_hz'), ('memory', 'interleave')):
             if key not in out['params']:
                 del out['params'][companion]
         return out
@@ -100,6 +112,8 @@ class InternalLowpass(Effect):
             filters.append(output_lowpass(self.corner_hz, int(self.order), ctx.dt))
         if self.notch_hz:
             filters.append(output_notch(self.notch_hz, self.notch_q, ctx.dt))
+        if self.memory:
+            filters.append(interleaved_memory(self.memory, int(self.interleave)))
         for b, a in filters:
             gyro = self._filter(b, a, gyro)
             accel = self._filter(b, a, accel) if self.accel else accel
