@@ -1,6 +1,6 @@
 """An angle read once a frame (``quantization:frame=M``): simulator, closed form, start, fit."""
-from gyro_char.diagnosis import expected, spread, static, static_expect
 from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis import static, static_expect
 from gyro_char.diagnosis.band_kurtosis import non_gaussian_bands
 from gyro_char.diagnosis.engine import run
 from gyro_char.diagnosis.spectra import model_spectrum
@@ -10,7 +10,7 @@ from gyro_char.sim.effects import EFFECTS, SimContext
 import numpy as np
 import pytest
 from scipy import signal
-from static_twin_base import BASE, DT, LSB, N_ARW
+from static_twin_base import BASE, check_twin_means, DT, LSB, N_ARW
 
 
 def framed(step, frame, dither=1.0):
@@ -63,16 +63,7 @@ def test_expected_observables_equal_the_twins_means_the_short_tau_scatter_is_wid
     # After a smoothing filter; coarse (the error correlated from frame to frame) or dithered.
     effects = [framed(2e-3, 10, dither),
                ('internal_lowpass', {'taps': 7.0, 'stages': 2.0, 'decimation': 8.0})]
-    n, reps = 2 ** 14, 10
-    lay = obs.static_layout(n, DT)
-    spec = model_spectrum(N_ARW, LSB, DT, effects)
-    mean, sd = expected.expected_blocks(spec, lay), spread.spreads(spec, lay)
-    twins = [obs.static_observables(static.simulate_twin(BASE, n, effects, 40 + k), lay)
-             for k in range(reps)]
-    for block in ('adev', 'psd', 'tone', 'acf', 'drift'):
-        stack = np.array([t[block] for t in twins])
-        tol = 4.5 * np.maximum(stack.std(axis=0, ddof=1), sd[block]) / np.sqrt(reps) + 1e-6
-        assert np.all(np.abs(mean[block] - stack.mean(axis=0)) < tol), block
+    twins, sd = check_twin_means(effects)
     # The spreads are Gaussian: one sample in ten carries the error, and the Allan deviations
     # below the frame scatter 2-7x wider than they say (documented; the Welch bins do not).
     adev_ratio = np.array([t['adev'] for t in twins]).std(axis=0, ddof=1) / sd['adev']

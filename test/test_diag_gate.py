@@ -1,6 +1,5 @@
 """Holds a glitch gate selects (``stale_samples:gate=G``): simulator, closed form, fit."""
-from gyro_char.diagnosis import expected, gate, spread, static, static_expect
-from gyro_char.diagnosis import observables as obs
+from gyro_char.diagnosis import gate, static, static_expect
 from gyro_char.diagnosis.engine import run
 from gyro_char.diagnosis.holds import repeat_excess
 from gyro_char.diagnosis.spectra import model_spectrum
@@ -10,7 +9,7 @@ from gyro_char.sim.effects.timing import gated
 import numpy as np
 import pytest
 from scipy import signal
-from static_twin_base import BASE, DT, LSB, N_ARW
+from static_twin_base import BASE, check_twin_means, DT, LSB, N_ARW
 
 SD = N_ARW / np.sqrt(DT)          # the per-sample white sd
 
@@ -67,17 +66,7 @@ def test_the_white_input_is_found_from_the_gated_outputs_level():
 
 
 def test_expected_observables_equal_the_twins_means():
-    effects = [gated_holds(2.8)]
-    n, reps = 2 ** 14, 10
-    lay = obs.static_layout(n, DT)
-    spec = model_spectrum(N_ARW, LSB, DT, effects)
-    mean, sd = expected.expected_blocks(spec, lay), spread.spreads(spec, lay)
-    twins = [obs.static_observables(static.simulate_twin(BASE, n, effects, 60 + k), lay)
-             for k in range(reps)]
-    for block in ('adev', 'psd', 'tone', 'acf', 'drift'):
-        stack = np.array([t[block] for t in twins])
-        tol = 4.5 * np.maximum(stack.std(axis=0, ddof=1), sd[block]) / np.sqrt(reps) + 1e-6
-        assert np.all(np.abs(mean[block] - stack.mean(axis=0)) < tol), block
+    check_twin_means([gated_holds(2.8)], seed0=60)
 
 
 def test_gated_holds_are_named_stale_samples_with_their_gate():
