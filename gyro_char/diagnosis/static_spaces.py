@@ -35,8 +35,10 @@ SHARE_SLACK = 1.5
 # The output-rate low-pass's corner, in cycles per sample: from 2 % of the rate (below, it is
 # a strong smoother the averages or a Gauss-Markov process describe) to just under Nyquist.
 DLPF_LO, DLPF_HI = 0.02, 0.4995
-# Interleaved converters searched (``memory_space``): 2 (double sampling) to this many.
+# Interleaved converters searched (``memory_space``): 2 (double sampling) to this many, where
+# a lag correlates more than every nearer one by MEMORY_Z standard errors.
 INTERLEAVE_MAX = 4
+MEMORY_Z = 3.0
 
 
 # How far (in robust sds of the record's 1/64-length moving average) its largest excursion
@@ -119,6 +121,7 @@ def static_spaces(base, x: np.ndarray,
     # A fractional power law's pivot: near the longest tau, where such a process shows.
     pivot = 0.5 / tau_max
     gm_start = markov_start(y, dt, base.N, *gm_tau, *gm_sigma)
+    memory = tuple(sp for sp in (memory_space(y),) if sp is not None)
     spaces = {
         # Cascaded moving averages (sinc^k: boxcar, Bartlett, the 3-stage CIC that decimating
         # MEMS front ends use) at 8x the output rate; taps = 1 would be the baseline. Or the
@@ -132,7 +135,7 @@ def static_spaces(base, x: np.ndarray,
                 Param('corner_hz', DLPF_LO / dt, DLPF_HI / dt, nyquist=0.5 / dt),
                 Param('order', 1, 2, integer=True, choice=True)],
                 fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0}),
-                split_space(dt, psd, bump), memory_space(y)), refit_all=True),
+                split_space(dt, psd, bump)) + memory, refit_all=True),
         # Flicker, optionally band-limited (1/f^2 above corner_hz; the top of its range, the
         # output Nyquist frequency, means no corner): B first without a corner, then the
         # corner, then both again (a corner moves the best B; refits near it: one pass). The
@@ -218,22 +221,30 @@ def gate_space(p_lo: float, p_hi: float, start: float, base) -> EffectSpace:
                        fixed={'p': 0.0})
 
 
-def memory_space(y: np.ndarray) -> EffectSpace:
+def memory_space(y: np.ndarray):
     """
     ``internal_lowpass``' interleaved memory: the share kept and the converters in turn.
 
     On white noise the memory r of L interleaved converters correlates the samples L apart by
-    r and no nearer ones, so the search starts at the record's largest correlation at lags 2
-    to ``INTERLEAVE_MAX`` (one converter's memory is the first-order DLPF); r from half the
-    correlation's standard error 1 / sqrt(n) to 0.9.
+    r and no nearer ones, whereas every smoother correlates neighbours most (and a white angle
+    error anti-correlates them). Searched only where some lag L in 2 to ``INTERLEAVE_MAX``
+    correlates more than every nearer lag does in magnitude, by MEMORY_Z standard errors
+    (1 / sqrt(n)), started there; r from half a standard error to
+    0.9. None where no lag does (one converter's memory is the first-order DLPF).
     """
     u = y - y.mean()
     var = float(np.dot(u, u))
-    rho = [float(np.dot(u[:-k], u[k:])) / var if var > 0.0 else 0.0
-           for k in range(2, INTERLEAVE_MAX + 1)]
-    lo, hi = 0.5 / np.sqrt(y.size), 0.9
+    if not var > 0.0:
+        return None
+    rho = np.array([float(np.dot(u[:-k], u[k:])) / var for k in range(1, INTERLEAVE_MAX + 1)])
+    se = 1.0 / np.sqrt(y.size)
+    lead = [rho[k] for k in range(1, rho.size)
+            if rho[k] > np.abs(rho[:k]).max() + MEMORY_Z * se]
+    if not lead:
+        return None
+    lo, hi = 0.5 * se, 0.9
     return EffectSpace('internal_lowpass', [
-        Param('memory', lo, hi, init=min(max(max(rho), lo), hi)),
+        Param('memory', lo, hi, init=min(max(max(lead), lo), hi)),
         Param('interleave', 2, INTERLEAVE_MAX, integer=True, choice=True)],
         fixed={'taps': 1.0, 'stages': 1.0, 'decimation': 1.0})
 
