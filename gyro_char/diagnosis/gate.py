@@ -38,9 +38,12 @@ def _cells() -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Return the cells' lower and upper edges (infinite at the ends), masses and means."""
     b = np.linspace(-EDGE, EDGE, CELLS + 1)
     lo, hi = np.r_[-np.inf, b[1:-1]], np.r_[b[1:-1], np.inf]
-    pdf = lambda v: np.exp(-0.5 * v * v) / np.sqrt(2.0 * np.pi)      # noqa: E731
     q = special.ndtr(hi) - special.ndtr(lo)
-    return lo, hi, q, (pdf(lo) - pdf(hi)) / q
+    return lo, hi, q, (_normal_pdf(lo) - _normal_pdf(hi)) / q
+
+
+def _normal_pdf(v: np.ndarray) -> np.ndarray:
+    return np.exp(-0.5 * v * v) / np.sqrt(2.0 * np.pi)
 
 
 def _transition(g: float) -> Tuple[np.ndarray, np.ndarray]:
