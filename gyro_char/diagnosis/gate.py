@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Tuple
 
-from gyro_char.diagnosis.holds import Holds
+from gyro_char.diagnosis.holds import cosine_series, Holds
 import numpy as np
 from scipy import special
 
@@ -113,26 +113,21 @@ class GateHolds:
     c: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        object.__setattr__(self, 'c', correction(round(self.gate / self.sigma, 9)))
+        object.__setattr__(self, 'c', correction(self.g))
+
+    @property
+    def g(self) -> float:
+        """Return the gate in input sds (rounded: the key of the cached chain results)."""
+        return round(self.gate / self.sigma, 9)
 
     @property
     def p(self) -> float:
         """Return the held share."""
-        return share(round(self.gate / self.sigma, 9))
+        return share(self.g)
 
     def ratio(self, nu) -> np.ndarray:
         """Return the gated white PSD over the input's at ``nu`` cycles a sample."""
-        nu = np.asarray(nu, dtype=np.float64)
-        c = self.c
-        if c.size > 32:
-            # Hundreds of lags: their cosine series on a fine uniform grid by one FFT (it is
-            # smooth on the scale 1 / lags), interpolated.
-            size = 1 << int(np.ceil(np.log2(64 * c.size)))
-            series = np.fft.rfft(np.r_[c, np.zeros(size - 2 * c.size + 1), c[:0:-1]]).real
-            return 1.0 + np.interp(np.mod(nu, 1.0), np.arange(series.size) / size, series)
-        k = np.arange(1, c.size)
-        w = 2.0 * np.pi * nu
-        return 1.0 + c[0] + 2.0 * np.cos(np.multiply.outer(w, k)) @ c[1:]
+        return 1.0 + cosine_series(self.c, nu, by_fft=self.c.size > 32)
 
     def gain(self) -> float:
         """Return the gain on white noise (in N) in the white band, 1-5 % of the rate."""
@@ -169,14 +164,13 @@ def input_sd(gate: float, out_sd: float) -> float:
     Return the white input sd s whose gated output has the white-band sd ``out_sd``.
 
     Solves s gain(gate / s) = out_sd (the left side rises with s: a wider gate holds less) by
-    bisection in log s on the tabulated gain; a gate beyond the table's range holds nothing.
+    bisection in log s on the tabulated gain, taken as its end values beyond the table (a
+    gate above it holds nothing).
     """
     lg, lgain = _gain_table()
 
-    def excess(log_s):
-        lgs = np.log(gate) - log_s
-        return log_s + (float(np.interp(lgs, lg, lgain)) if lgs >= lg[0] else lgain[0]) \
-            - np.log(out_sd)
+    def excess(log_s):              # np.interp holds the table's end values beyond it
+        return log_s + float(np.interp(np.log(gate) - log_s, lg, lgain)) - np.log(out_sd)
     lo, hi = np.log(out_sd) - lgain.max() - 0.1, np.log(out_sd) + 0.1
     for _ in range(50):
         mid = 0.5 * (lo + hi)

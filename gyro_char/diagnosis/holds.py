@@ -153,20 +153,27 @@ class Holds:
         """Return the held one-sided PSD at ``f`` from the unheld one ``s`` and ``terms``."""
         p = self.p
         f = np.asarray(f, dtype=np.float64)
-        if self.run > 0.0 and terms.size > 32:
-            # Hundreds of lags: their cosine series on a fine uniform grid by one FFT (it is
-            # smooth on the scale 1 / lags), interpolated.
-            size = 1 << int(np.ceil(np.log2(64 * terms.size)))
-            series = np.fft.rfft(np.r_[terms, np.zeros(size - 2 * terms.size + 1),
-                                       terms[:0:-1]]).real
-            extra = np.interp(np.mod(f * dt, 1.0), np.arange(series.size) / size, series)
-            return self.g2(f, dt) * s + 2.0 * dt * extra
         if self.isolated or self.run > 0.0:
-            w = 2 * np.pi * f * dt
-            extra = terms[0] + 2.0 * sum(c * np.cos(k * w) for k, c in enumerate(terms) if k)
+            extra = cosine_series(terms, f * dt, by_fft=self.run > 0.0 and terms.size > 32)
             return self.g2(f, dt) * s + 2.0 * dt * extra
         ar1 = 2.0 * (1.0 - p * p) * dt / ((1.0 - p) ** 2 + 4.0 * p * _s2(f, dt))
         return self.g2(f, dt) * s + terms[0] * ar1
+
+
+def cosine_series(c: np.ndarray, nu, by_fft: bool = False) -> np.ndarray:
+    """
+    Return c_0 + 2 sum_(k >= 1) c_k cos(2 pi nu k) at ``nu`` cycles a sample.
+
+    ``by_fft`` (hundreds of lags): the series on a fine uniform grid by one FFT (it is smooth
+    on the scale 1 / lags), interpolated; else summed term by term.
+    """
+    nu = np.asarray(nu, dtype=np.float64)
+    if by_fft:
+        size = 1 << int(np.ceil(np.log2(64 * c.size)))
+        series = np.fft.rfft(np.r_[c, np.zeros(size - 2 * c.size + 1), c[:0:-1]]).real
+        return np.interp(np.mod(nu, 1.0), np.arange(series.size) / size, series)
+    w = 2 * np.pi * nu
+    return c[0] + 2.0 * sum(ck * np.cos(k * w) for k, ck in enumerate(c) if k)
 
 
 def _half_variogram(f, s, f0, power, dt: float, count: int) -> np.ndarray:

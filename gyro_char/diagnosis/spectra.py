@@ -11,12 +11,12 @@ stage has an exact discrete-time PSD, so the twin's output PSD is
 
 (decimation folds the D images of the internal band; two-sided, per Hz; G is the sensor's
 output-rate filters, if any: low-pass, notch, mode-split response, interleaved memory, their
-delay of a slow warm-up neglected). Tones are lines,
-folded the same way, but a tone whose frequency wanders is a noise part (``wander``); a
-warm-up is a deterministic mean term. Stale samples (an output sample repeating the previous
-one) act last, on the whole output (``holds.Holds``; those a glitch gate selects: ``gate``).
-``ModelSpectrum`` holds the result for one model; every observable's expectation is a linear
-functional of it (``gyro_char.diagnosis.expected``). The output step is taken as white
+delay of a slow warm-up neglected). Tones are lines, folded the same way, but a tone whose
+frequency wanders is a noise part (``wander``); a warm-up is a deterministic mean term.
+Stale samples (an output sample repeating the previous one) act last, on the whole output
+(``holds.Holds``; those a glitch gate selects: ``gate``). ``ModelSpectrum`` holds the result
+for one model; every observable's expectation is a linear functional of it
+(``gyro_char.diagnosis.expected``). The output step is taken as white
 rounding noise (lsb^2 / 12 per sample, exact while the per-sample noise exceeds about half a
 step; below, given the rate's mean, the exact excess of rounding the white noise: ``rounding``).
 """
@@ -352,7 +352,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
     than 1.2 per-sample sd). Raises ValueError for an effect without a closed form (a motion
     or encoder effect).
     """
-    decim, taps, stages, holds, corner, order = 1, 1, 1, None, 0.0, 0
+    decim, taps, stages, hold_params, corner, order = 1, 1, 1, None, 0.0, 0
     notch, split, memory = (0.0, 0.0), (0.0, 0.0), (0.0, 2)
     for name, p in effects:
         if name == 'internal_lowpass':
@@ -366,11 +366,11 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
             if p.get('memory', 0.0):
                 memory = (p['memory'], int(p.get('interleave', 2.0)))
         elif name == 'stale_samples':
-            holds = p
+            hold_params = p
     h = moving_average_kernel(taps, stages)
     gain = float(np.sqrt(decim * np.sum([h[r::decim].sum() ** 2 for r in range(decim)])))
+    holds = None if hold_params is None else hold_model(hold_params, n_white, dt, gain)
     if holds is not None:
-        holds = hold_model(holds, n_white, dt, gain)
         gain *= holds.gain()
     dt_i = dt / decim
     spec = ModelSpectrum(dt=dt, decimation=decim, taps=taps, stages=stages,

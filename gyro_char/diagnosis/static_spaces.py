@@ -229,14 +229,10 @@ def memory_space(y: np.ndarray):
     r and no nearer ones, whereas every smoother correlates neighbours most (and a white angle
     error anti-correlates them). Searched only where some lag L in 2 to ``INTERLEAVE_MAX``
     correlates more than every nearer lag does in magnitude, by MEMORY_Z standard errors
-    (1 / sqrt(n)), started there; r from half a standard error to
-    0.9. None where no lag does (one converter's memory is the first-order DLPF).
+    (1 / sqrt(n)), started there; r from half a standard error to 0.9. None where no lag
+    does (one converter's memory is the first-order DLPF).
     """
-    u = y - y.mean()
-    var = float(np.dot(u, u))
-    if not var > 0.0:
-        return None
-    rho = np.array([float(np.dot(u[:-k], u[k:])) / var for k in range(1, INTERLEAVE_MAX + 1)])
+    rho = obs.autocorrelation(y, INTERLEAVE_MAX)        # zeros for a constant record
     se = 1.0 / np.sqrt(y.size)
     lead = [rho[k] for k in range(1, rho.size)
             if rho[k] > np.abs(rho[:k]).max() + MEMORY_Z * se]
