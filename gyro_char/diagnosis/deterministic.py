@@ -1,11 +1,11 @@
 """
-The warm-up (a deterministic mean term) seen through the static observables' forms.
+The deterministic mean term (warm-ups, a thermal cycle) seen through the static observables.
 
 A mean term adds to each quadratic form (Allan variance, Welch PSD, lag products) its own
 value on the detrended term, and to each linear form (early-minus-late means) likewise; the
 closed-form expectation (``gyro_char.diagnosis.expected``) adds these to the noise's. The
-forms are evaluated without per-sample loops: a warm-up is smooth on the scale of a Welch
-segment and of the short clusters.
+forms are evaluated without per-sample loops: a warm-up and a cycle (periods of twice a Welch
+segment or more) are smooth on the scale of a Welch segment and of the short clusters.
 """
 from dataclasses import dataclass
 
@@ -25,6 +25,31 @@ class Deterministic:
     drift: np.ndarray
 
 
+def has_mean_term(spec: ModelSpectrum) -> bool:
+    """Return True where the model has a deterministic mean term (a warm-up or a cycle)."""
+    return bool(spec.warmups or spec.cycles)
+
+
+def mean_term(spec: ModelSpectrum, n: int) -> np.ndarray:
+    """Return the mean term at the ``n`` output sample instants (zeros without one)."""
+    t = np.arange(n) * spec.dt
+    out = np.zeros(n)
+    for amp, tau, t0 in spec.warmups:
+        out += warmup_at(spec, t, amp, tau, t0)
+    for amp, period, phase in spec.cycles:
+        out += amp * np.sin(2.0 * np.pi * (t + spec.time_shift) / period + phase)
+    return out
+
+
+def warmup_at(spec: ModelSpectrum, t: np.ndarray, amp: float, tau: float,
+              t0: float = 0.0) -> np.ndarray:
+    """One warm-up term at output times ``t`` (decimation phase and filter delay included)."""
+    since = np.asarray(t) + spec.time_shift
+    if t0 > 0.0:
+        since = np.maximum(since - t0, 0.0)
+    return amp * np.exp(-since / tau)
+
+
 def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
     """
     Evaluate the observables' forms on the detrended warm-up (a smooth mean term), fast.
@@ -37,10 +62,10 @@ def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
     """
     m = g.m
     n_blocks = len(obs.DRIFT_FRACTIONS)
-    if not spec.warmups:
+    if not has_mean_term(spec):
         return Deterministic(np.zeros(m.size), np.zeros(g.nps // 2 + 1), np.zeros(lags + 1),
                              np.zeros(n_blocks))
-    raw = spec.deterministic(g.n)
+    raw = mean_term(spec, g.n)
     d = obs.detrend(raw)
     line = raw - d
     slope = (line[-1] - line[0]) / (g.n - 1)          # per sample
@@ -72,7 +97,9 @@ def deterministic(spec: ModelSpectrum, g, lags: int) -> Deterministic:
 
 def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
     """
-    Welch PSD of the detrended warm-up: per segment s, sum_i a_is e_i(j) - slope j.
+    Welch PSD of the detrended mean term: per segment s, sum_i a_is e_i(j) - slope j.
+
+    Each e_i is a warm-up's exponential or a cycle's cosine or sine.
 
     A transient that starts mid-record (t0 > 0) is constant before t0, which each segment's
     mean removes, and exponential after it; the one or two segments it starts in are terms
@@ -86,7 +113,7 @@ def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
     t0 = np.arange(nseg) * step * g.dt
     coef, shapes = [], []
     for amp, tau, start in spec.warmups:
-        a = spec.deterministic_at(t0, amp, tau, start)
+        a = warmup_at(spec, t0, amp, tau, start)
         if start > 0.0:
             first = t0 + spec.time_shift
             before = first + (L - 1) * g.dt <= start
@@ -94,9 +121,15 @@ def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
             a = np.where(before | inside, 0.0, a)
             for s in np.flatnonzero(inside):
                 coef.append(np.where(np.arange(nseg) == s, 1.0, 0.0))
-                shapes.append(spec.deterministic_at(t0[s] + j * g.dt, amp, tau, start))
+                shapes.append(warmup_at(spec, t0[s] + j * g.dt, amp, tau, start))
         coef.append(a)
         shapes.append(np.exp(-j * g.dt / tau))
+    for amp, period, phase in spec.cycles:
+        # sin(w (t_s + j dt) + phase) = sin(theta_s) cos(w j dt) + cos(theta_s) sin(w j dt)
+        w_rad = 2.0 * np.pi / period
+        theta = w_rad * (t0 + spec.time_shift) + phase
+        coef += [amp * np.sin(theta), amp * np.cos(theta)]
+        shapes += [np.cos(w_rad * j * g.dt), np.sin(w_rad * j * g.dt)]
     coef.append(np.full(nseg, -slope))
     shapes.append(j)
     spectra_ = []

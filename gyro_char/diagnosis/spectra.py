@@ -30,7 +30,7 @@ from gyro_char.allan.expected import moving_average_kernel
 from gyro_char.diagnosis import rounding, wander
 from gyro_char.diagnosis.gate import hold_model
 from gyro_char.diagnosis.holds import GRID
-from gyro_char.sim.effects.base import transient_terms
+from gyro_char.sim.effects.base import cycle_terms, transient_terms
 from gyro_char.sim.effects.readout import framed_error_psd
 from gyro_char.sim.effects.responses import (interleaved_memory_gain2, output_lowpass_gain2,
                                              output_notch_gain2, sense_gain2)
@@ -149,6 +149,8 @@ class ModelSpectrum:
     lines: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, mean square)
     # (amplitude, tau_s, t0_s): a transient from power-on (t0 0) or from mid-record.
     warmups: List[Tuple[float, float, float]] = field(default_factory=list)
+    # (amplitude, period, phase): a periodic cycle's sinusoids (``cycle_terms``).
+    cycles: List[Tuple[float, float, float]] = field(default_factory=list)
     peaks: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, width) to resolve
     holds: Optional[object] = None       # ``Holds`` or ``GateHolds``; ``lines`` then held
     unheld_lines: List[Tuple[float, float]] = field(default_factory=list)
@@ -286,26 +288,10 @@ class ModelSpectrum:
             total += part(f)
         return 2.0 * total
 
-    def deterministic(self, n: int) -> np.ndarray:
-        """Return the warm-up terms at the ``n`` output sample instants (zeros without warm-up)."""
-        t = np.arange(n) * self.dt
-        out = np.zeros(n)
-        for amp, tau, t0 in self.warmups:
-            out += self.deterministic_at(t, amp, tau, t0)
-        return out
-
     @property
     def time_shift(self) -> float:
-        """Where an output sample's warm-up value is taken: decimation phase less filter delay."""
+        """Where an output sample's mean term is taken: decimation phase less filter delay."""
         return (self.decimation - 1) * self.dt_i - 0.5 * (self.taps - 1) * self.stages * self.dt_i
-
-    def deterministic_at(self, t: np.ndarray, amp: float, tau: float,
-                         t0: float = 0.0) -> np.ndarray:
-        """One warm-up term at output times ``t`` (decimation phase and filter delay included)."""
-        since = np.asarray(t) + self.time_shift
-        if t0 > 0.0:
-            since = np.maximum(since - t0, 0.0)
-        return amp * np.exp(-since / tau)
 
 
 def _add_wandering_tone(spec: ModelSpectrum, power: float, f0: float, wander_hz: float,
@@ -408,11 +394,13 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
             f_out = fold(fa, 1.0 / dt)
             power = 0.5 * np.array([a for _, a in lines]) ** 2 * spec.h2(fa) * spec.g2(f_out)
             spec.lines.extend(zip(f_out.tolist(), power.tolist()))
+        elif name == 'temperature_drift' and p.get('cycle_s', 0.0) > 0.0:
+            spec.cycles.extend(cycle_terms(p))
         elif name == 'temperature_drift':
             for c, lag in transient_terms(p['amplitude'], p['tau_s'], p.get('rise_s', 0.0)):
                 spec.warmups.append((c, lag, p.get('t0_s', 0.0)))
     if holds is not None:
-        # Warm-ups pass unchanged (a hold shifts a slow mean by p dt / (1 - p) of its slope).
+        # Mean terms pass unchanged (a hold shifts a slow mean by p dt / (1 - p) of its slope).
         spec.holds, spec.unheld_lines = holds, list(spec.lines)
         spec.lines = [(f0, a * float(holds.g2(f0, dt))) for f0, a in spec.lines]
     return spec

@@ -16,6 +16,7 @@ from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis import rounding
 from gyro_char.diagnosis import static as ds
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
+from gyro_char.diagnosis.deterministic import has_mean_term
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.kurtosis_choice import KurtosisCriterion
 from gyro_char.diagnosis.narrow_lines import LineCheck
@@ -53,9 +54,10 @@ class StaticExpect:
             self.log_bias.append(spread.log_adev_moments(spread.adev_edf(spec, g))[0])
 
     def _deterministic(self, i, spec):
-        if not spec.warmups:
+        if not has_mean_term(spec):
             return None
-        key = (i, tuple(spec.warmups), spec.decimation, spec.taps, spec.stages)
+        key = (i, tuple(spec.warmups), tuple(spec.cycles), spec.decimation, spec.taps,
+               spec.stages)
         if key not in self._det:
             if len(self._det) > 64:
                 self._det.clear()

@@ -11,12 +11,14 @@ from typing import List, Sequence
 
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.band_kurtosis import steady_envelope
+from gyro_char.diagnosis.cycle import cycle_start, CycleStart
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.gate import gate_for_share, GateHolds
 from gyro_char.diagnosis.holds import repeat_excess, repeat_runs, REPEAT_Z
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.diagnosis.starts import frame_start, FRAMES, markov_start
 from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
+from gyro_char.sim.effects.base import CYCLE_HARMONICS
 import numpy as np
 
 STATIC_EFFECTS = ('internal_lowpass', 'bias_instability', 'rate_random_walk', 'gauss_markov',
@@ -108,6 +110,9 @@ def static_spaces(base, x: np.ndarray,
              else None)
     j, z, sign = standout(smooth)
     pulse = ((j + w / 2) * dt, sign) if z > PULSE_Z else None
+    # A slow cycle (an HVAC or thermostat cycle): periods from two Welch segments (shorter
+    # ones are the PSD's lines) up to a quarter of the record, where a line stands out.
+    cycle = cycle_start(y, dt, 2.0 * obs.welch_segment(n) * dt)
     k_long = sig_long / np.sqrt(tau_max)
     # Upper bounds from the record itself as well: on a long record a strong random walk or
     # flicker floor can sit far above 30x the white noise's Allan deviation at the longest tau.
@@ -165,7 +170,7 @@ def static_spaces(base, x: np.ndarray,
         # read once a frame where the PSD shows that comb of nulls (``starts.frame_start``).
         'quantization': quantization_space(base.N * np.sqrt(dt), frame_start(psd, dt)),
         'temperature_drift': warm_up_space(sig_long, sig_sample, length, warm_sign, onset,
-                                           pulse),
+                                           pulse, cycle),
         # The detected peak's frequency is known to a Welch bin: searched within +-2 bins (a
         # line between bins spreads its power differently from one on a bin). Where the PSD
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
@@ -293,7 +298,7 @@ def quantization_space(inc: float, framed=None) -> EffectSpace:
 
 
 def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
-                  onset=None, pulse=None) -> EffectSpace:
+                  onset=None, pulse=None, cycle=None) -> EffectSpace:
     """
     ``temperature_drift``'s search: a warm-up from power-on, one that started later, a pulse.
 
@@ -301,7 +306,8 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
     change point, the sign there): a transient from ``t0_s`` (a draught, a heater switching
     mid-record), and ``pulse`` = (time of the largest excursion, its sign): a pulse
     (``rise_s``) rising before it. Each alternative fits amplitude and lags around its start,
-    then the onset; the best of them is kept.
+    then the onset; the best of them is kept. ``cycle`` (a ``cycle.CycleStart``): a periodic
+    cycle (``cycle_space``).
     """
     lag = Param('tau_s', length / 200, length / 2)
     power_on = EffectSpace('temperature_drift', [
@@ -320,4 +326,24 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
             Param('tau_s', length / 400, length / 4),
             Param('rise_s', length / 4000, length / 20),
             replace(t0, init=start)]))
+    if cycle is not None:
+        others.append(cycle_space(cycle))
     return replace(power_on, alternatives=tuple(others))
+
+
+def cycle_space(cycle: CycleStart) -> EffectSpace:
+    """
+    ``temperature_drift``'s periodic cycle, its period and phases as read from the record.
+
+    Each kept harmonic's amplitude is searched within a factor 3 of the record's; the period
+    and the phases are kept (a period off by 1 % turns a 2 h record's 8th cycle by half a
+    radian, which the early means see) and counted as estimated.
+    """
+    params, fixed, phases = [], {'cycle_s': cycle.period}, []
+    for suffix, a, phase in zip(CYCLE_HARMONICS, cycle.amplitudes, cycle.phases):
+        if a > 0.0:
+            params.append(Param('amplitude' + suffix, a / 3.0, 3.0 * a, init=a))
+            fixed['phase' + suffix] = phase
+            phases.append('phase' + suffix)
+    return EffectSpace('temperature_drift', params, fixed=fixed,
+                       estimated=('cycle_s',) + tuple(phases))

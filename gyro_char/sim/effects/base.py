@@ -217,6 +217,29 @@ def axis_rows(effect) -> list:
     return [0, 1, 2] if axis == -1 else [axis]
 
 
+# Suffixes of a cycle's fundamental's and harmonics' parameters (``cycle_terms``).
+CYCLE_HARMONICS = ('', '2', '3')
+
+
+def cycle_terms(params: dict) -> list:
+    """
+    Return a periodic bias as (amplitude, period, phase) sinusoids: the fundamental and harmonics.
+
+    ``cycle_s`` is the fundamental's period; ``amplitude``/``phase`` its sinusoid, ``amplitudeK``
+    /``phaseK`` the K-th harmonic's (K = 2, 3), left out where their amplitude is 0. None
+    where ``cycle_s`` is 0 (the bias is a transient then).
+    """
+    period = params.get('cycle_s', 0.0)
+    if not period > 0.0:
+        return []
+    out = []
+    for k, suffix in enumerate(CYCLE_HARMONICS, start=1):
+        a = params.get('amplitude' + suffix, 0.0)
+        if a:
+            out.append((a, period / k, params.get('phase' + suffix, 0.0)))
+    return out
+
+
 def transient_terms(amplitude: float, tau_s: float, rise_s: float = 0.0) -> list:
     """
     Return a bias transient as (coefficient, lag) terms c exp(-(t - t0) / lag), held before t0.

@@ -11,9 +11,9 @@ from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
-from gyro_char.sim.effects.base import (add_truth_term, axis_param, axis_rows, describe_without,
-                                        Effect, markov, register, second_order_gm,
-                                        transient_terms)
+from gyro_char.sim.effects.base import (add_truth_term, axis_param, axis_rows, cycle_terms,
+                                        describe_without, Effect, markov, register,
+                                        second_order_gm, transient_terms)
 from gyro_char.sim.effects.responses import (interleaved_memory, output_lowpass, output_notch,
                                              sense_response)
 from gyro_char.units import DEG
@@ -163,25 +163,44 @@ class TemperatureDrift(Effect):
                'holds amplitude until t0_s, then settles through the same lag, '
                'amplitude exp(-(t - t0_s) / tau_s). rise_s > 0: a pulse instead, of peak '
                'amplitude, rising with rise_s and decaying with tau_s, zero before t0_s and '
-               'long after (a bias sensing dT/dt under a passing temperature change).')
-    PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0 (before t0_s)'),
+               'long after (a bias sensing dT/dt under a passing temperature change). '
+               'cycle_s > 0: a periodic cycle instead (an HVAC or thermostat cycle of the '
+               'room reaching the die through its lag; a bias linear in temperature gives '
+               'the fundamental, a curved one (near its turnover) the harmonics): '
+               'amplitude sin(2 pi t / cycle_s + phase) + amplitude2 sin(4 pi t / cycle_s + '
+               'phase2) + amplitude3 sin(6 pi t / cycle_s + phase3); tau_s, t0_s and rise_s '
+               'are then not used.')
+    PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0 (before t0_s); '
+                            "a cycle's fundamental amplitude"),
               'tau_s': (600.0, 's', 'thermal time constant'),
               't0_s': (0.0, 's', 'when the transient starts (0: at power-on)'),
               'rise_s': (0.0, 's', 'rise time of a pulse (0: a step, no pulse)'),
+              'cycle_s': (0.0, 's', 'period of a periodic cycle (0: a transient, no cycle)'),
+              'phase': (0.0, 'rad', "the cycle's fundamental phase at t = 0"),
+              'amplitude2': (0.0, 'rad/s', "the cycle's second harmonic amplitude"),
+              'phase2': (0.0, 'rad', "the second harmonic's phase at t = 0"),
+              'amplitude3': (0.0, 'rad/s', "the cycle's third harmonic amplitude"),
+              'phase3': (0.0, 'rad', "the third harmonic's phase at t = 0"),
               'axis': axis_param()}
 
     def check(self):
         axis_rows(self)
-        if self.tau_s <= 0 or self.t0_s < 0 or self.rise_s < 0:
-            raise InputError('temperature_drift: tau_s must be > 0, t0_s and rise_s >= 0')
+        if self.tau_s <= 0 or self.t0_s < 0 or self.rise_s < 0 or self.cycle_s < 0:
+            raise InputError('temperature_drift: tau_s must be > 0, t0_s, rise_s and cycle_s '
+                             '>= 0')
 
     def describe(self):
-        return describe_without(self, 't0_s', 'rise_s')
+        return describe_without(self, 't0_s', 'rise_s', 'cycle_s', 'phase', 'amplitude2',
+                                'phase2', 'amplitude3', 'phase3')
 
     def sensor(self, ctx, gyro, accel):
-        since = np.maximum(ctx.t - self.t0_s, 0.0)
-        shape = sum(c * np.exp(-since / lag)
-                    for c, lag in transient_terms(self.amplitude, self.tau_s, self.rise_s))
+        if self.cycle_s > 0.0:
+            shape = sum(a * np.sin(2.0 * np.pi * ctx.t / period + phase)
+                        for a, period, phase in cycle_terms(self.params))
+        else:
+            since = np.maximum(ctx.t - self.t0_s, 0.0)
+            shape = sum(c * np.exp(-since / lag)
+                        for c, lag in transient_terms(self.amplitude, self.tau_s, self.rise_s))
         gyro = gyro.copy()
         for r in axis_rows(self):
             gyro[r] += shape
