@@ -30,7 +30,6 @@ from typing import Callable, Optional, Tuple
 
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.expected import line_bins
-from gyro_char.sim.effects.vibration import TONES
 import numpy as np
 from scipy import ndimage, signal, special
 
@@ -42,6 +41,7 @@ HANN_INFLATION = 1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0)   # neighbouring bins' cor
 MAX_REPORTED = 10       # lines reported at most, smallest p first
 LINE_BINS = 2           # Hann leakage bins either side summed into a line's power
 MODEL_SHARE = 0.5       # a model excess this share of the record's makes the line the model's
+NAMED_TONES = 6         # lines a model lacks named as one vibration after the search, at most
 
 
 def fine_segment(n: int) -> int:
@@ -140,30 +140,41 @@ def narrow_lines(x: np.ndarray, dt: float, spec=None, *, report_p: float = REPOR
             scan = line_scan(x, dt)
         except ValueError:
             return None
-    hot = np.flatnonzero(scan['p'] < report_p)
-    groups = np.split(hot, np.flatnonzero(np.diff(hot) > 1) + 1) if hot.size else []
-    made = None
-    if spec is not None and groups:
+    found = line_groups(scan, report_p)
+    if spec is not None and found:
         f_all = np.fft.rfftfreq(scan['segment'], dt)
         made = model_excess(spec, f_all, dt, scan['segment'], scan['size'])[scan['keep']]
-    found = []
-    for g in groups:
-        i = g[np.argmax(scan['excess'][g])]
-        excess = float(scan['excess'][i])
-        lo, hi = max(g[0] - LINE_BINS, 0), min(g[-1] + LINE_BINS + 1, scan['f'].size)
-        power = float(np.sum(scan['psd'][lo:hi] - scan['noise'][lo:hi])
-                      * scan['resolution_hz'])
-        entry = {'frequency_hz': peak_frequency(scan, i), 'excess': excess,
-                 'p_value': float(scan['p'][i]), 'bins': int(g.size),
-                 'mean_square': max(power, 0.0)}
-        if made is not None:
+        for entry in found:
+            i = entry.pop('bin')
             entry['model_excess'] = float(made[i])
-            entry['in_model'] = bool(made[i] >= MODEL_SHARE * excess)
-        found.append(entry)
+            entry['in_model'] = bool(made[i] >= MODEL_SHARE * entry['excess'])
+    for entry in found:
+        entry.pop('bin', None)
     found.sort(key=lambda d: d['p_value'])
     summary = {k: scan[k] for k in ('segment', 'resolution_hz', 'k_eff', 'tested_hz', 'bins')}
     return {**summary, 'report_p': report_p, 'lines': found[:MAX_REPORTED],
             'more': max(len(found) - MAX_REPORTED, 0)}
+
+
+def line_groups(scan: dict, report_p: float = REPORT_P) -> list:
+    """
+    Every line of ``scan`` (``line_scan``) with a family-wise p below ``report_p``.
+
+    Contiguous bins are one line, at its largest: its frequency, excess, p, bins, mean
+    square (its bins and LINE_BINS either side above the floor) and ``bin`` (tested bin).
+    """
+    hot = np.flatnonzero(scan['p'] < report_p)
+    groups = np.split(hot, np.flatnonzero(np.diff(hot) > 1) + 1) if hot.size else []
+    found = []
+    for g in groups:
+        i = g[np.argmax(scan['excess'][g])]
+        lo, hi = max(g[0] - LINE_BINS, 0), min(g[-1] + LINE_BINS + 1, scan['f'].size)
+        power = float(np.sum(scan['psd'][lo:hi] - scan['noise'][lo:hi])
+                      * scan['resolution_hz'])
+        found.append({'frequency_hz': peak_frequency(scan, i),
+                      'excess': float(scan['excess'][i]), 'p_value': float(scan['p'][i]),
+                      'bins': int(g.size), 'mean_square': max(power, 0.0), 'bin': int(i)})
+    return found
 
 
 def peak_frequency(scan: dict, i: int) -> float:
@@ -183,7 +194,7 @@ def missing(found: dict) -> list:
 def vibration_for(new: list, spectrum: Callable[[list], object],
                   model: list) -> Tuple[str, dict]:
     """
-    Return the ``vibration`` effect that makes the lines ``new`` (at most ``TONES``).
+    Return the ``vibration`` effect that makes the lines ``new`` (at most its ``TONES``).
 
     Each line at its peak frequency, with the amplitude whose output line (through the
     model's own filters: ``spectrum`` of the model plus a unit tone) carries the line's
@@ -217,18 +228,24 @@ class LineCheck:
         self.spectrum = spectrum
         self._scan = None
 
-    def report(self, model: list) -> Optional[dict]:
-        """Return ``narrow_lines`` of the record against ``model`` (None: too short)."""
+    def scan(self) -> Optional[dict]:
+        """Return the record's ``line_scan``, once (None: too short to look finer)."""
         if self._scan is None:
             try:
                 self._scan = line_scan(self.x, self.dt)
             except ValueError:
                 return None
+        return self._scan
+
+    def report(self, model: list) -> Optional[dict]:
+        """Return ``narrow_lines`` of the record against ``model`` (None: too short)."""
+        if self.scan() is None:
+            return None
         return narrow_lines(self.x, self.dt, self.spectrum(list(model)), scan=self._scan)
 
     def __call__(self, model: list) -> Optional[tuple]:
         found = self.report(model)
-        new = [] if found is None else missing(found)[:TONES]
+        new = [] if found is None else missing(found)[:NAMED_TONES]
         if not new:
             return None
         where = ', '.join(f'{d["frequency_hz"]:.3f}' for d in new)

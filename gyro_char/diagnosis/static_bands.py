@@ -8,16 +8,23 @@ gap's own highest band (a weak mode) and deepest dip (an output-rate notch of
 ``internal_lowpass``).
 """
 from dataclasses import replace
-from typing import List, Optional, Sequence
+from typing import Callable, List, Optional, Sequence
 
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.narrow_lines import line_groups, line_scan, vibration_for
 from gyro_char.sim.effects.vibration import TONES
 import numpy as np
 
 
 # The widest gap band taken for a mode's (hi / lo): a mode of q 1 raises about two octaves.
 BAND_MAX_RATIO = 4.0
+# A forest of steady lines (``forest_start``): at least FOREST_MIN lines at fine resolution,
+# each within FOREST_GAP Hz of the next, about the strongest.
+FOREST_MIN = 8
+FOREST_GAP = 1.0
+# Unrelated tones searched one amplitude each (the tones start): the six strongest lines.
+SEARCHED_TONES = 6
 
 
 def _mode_space(sig_sample: float, lo: float, hi: float, dt: float,
@@ -111,9 +118,47 @@ def _centre_in(space: EffectSpace, f: float) -> bool:
     return p.lo <= f <= p.hi
 
 
+def forest_start(x: np.ndarray, dt: float) -> Optional[list]:
+    """
+    Return the lines of a forest of steady lines in ``x`` (``narrow_lines.line_groups``), or None.
+
+    Many machines at fixed speeds (a rack of fans, pumps at one duty) put many steady lines
+    in one band: at the gap's resolution a band like a mode's, at the line scan's
+    (``narrow_lines.line_scan``) lines, where a mode's band shows none. The forest is the run
+    of lines about the strongest whose neighbours are within FOREST_GAP Hz, if it holds
+    FOREST_MIN or more (the TONES strongest of them).
+    """
+    try:
+        lines = sorted(line_groups(line_scan(x, dt)), key=lambda d: d['frequency_hz'])
+    except ValueError:
+        return None
+    if len(lines) < FOREST_MIN:
+        return None
+    f = np.array([d['frequency_hz'] for d in lines])
+    top = int(np.argmax([d['mean_square'] for d in lines]))
+    cuts = np.flatnonzero(np.diff(f) > FOREST_GAP) + 1
+    run = next(r for r in np.split(np.arange(f.size), cuts) if top in r)
+    if run.size < FOREST_MIN:
+        return None
+    return sorted((lines[i] for i in run), key=lambda d: -d['mean_square'])[:TONES]
+
+
+def forest_space(forest: list, spectrum: Callable) -> EffectSpace:
+    """
+    ``vibration``'s forest: every line at its measured frequency and mean square, none searched.
+
+    Each amplitude carries its line's mean square through the baseline's filters
+    (``narrow_lines.vibration_for``); frequencies and amplitudes are estimated from the
+    record (two parameters a line to the criterion).
+    """
+    _, params = vibration_for(forest, spectrum, [])
+    return EffectSpace('vibration', [], fixed=params, estimated=tuple(params))
+
+
 def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: float,
                     lines: Sequence[float], levels: Sequence[float],
-                    wander: bool = False) -> EffectSpace:
+                    wander: bool = False, forest=None,
+                    spectrum: Optional[Callable] = None) -> EffectSpace:
     """
     ``vibration``'s search: the tone at the strongest narrow peak; combs and tones if shown.
 
@@ -124,11 +169,14 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
     start. Where three or more sit on one lattice (``observables.comb_of``), a comb about the
     strongest is an alternative start: lines at centre + k spacing under a Lorentzian
     envelope whose width is fitted (a tone is its narrow limit). Where two or more lines
-    show, the ``TONES`` strongest as unrelated tones are another, each amplitude fitted within
-    a factor 2 of its line's measured amplitude (``levels``; a search from one tone at a time
-    crawls along the valley where their total power is right). Line frequencies and the
-    spacing, measured on the lines' peaks, are kept (``estimated``): the observables hardly
-    see a change within a bin, so a search would only trade them for noise.
+    show, the SEARCHED_TONES strongest as unrelated tones are another, each amplitude fitted
+    within a factor 2 of its line's measured amplitude (``levels``; a search from one tone at
+    a time crawls along the valley where their total power is right). ``forest``
+    (``forest_start``): a forest of steady lines, each where the fine scan measures it
+    (``forest_space``, ``spectrum`` the baseline's model spectrum of effects). Line
+    frequencies and the spacing, measured on the lines' peaks, are kept (``estimated``): the
+    observables hardly see a change within a bin, so a search would only trade them for
+    noise.
     """
     amplitude = Param('amplitude', 0.01 * sig_sample, 2.0 * sig_sample)
     freq = (Param('freq_hz', max(f_tone - 2.0 * df, df), f_tone + 2.0 * df, log=False)
@@ -152,9 +200,9 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
             Param('width_hz', 0.25 * spacing, 1.0 / dt)], fixed={'spacing_hz': spacing},
             estimated=('spacing_hz',), passes=2))
     if lines.size >= 2:
-        tones = lines[:TONES]
+        tones = lines[:SEARCHED_TONES]
         names = [('freq_hz', 'amplitude')] + [(f'freq{j}_hz', f'amplitude{j}')
-                                              for j in range(2, TONES + 1)]
+                                              for j in range(2, SEARCHED_TONES + 1)]
         lo, hi = 0.01 * sig_sample, 2.0 * sig_sample
         start = np.clip(levels[:tones.size], lo, hi)
         others.append(EffectSpace('vibration', [
@@ -162,4 +210,6 @@ def vibration_space(sig_sample: float, f_tone: Optional[float], df: float, dt: f
             for (_, a), v in zip(names, start.tolist())],
             fixed={f: float(v) for (f, _), v in zip(names, tones)},
             estimated=tuple(f for f, _ in names[:tones.size]), passes=2))
+    if forest is not None:
+        others.append(forest_space(forest, spectrum))
     return EffectSpace('vibration', [amplitude, freq], alternatives=tuple(others))

@@ -18,7 +18,7 @@ from gyro_char.diagnosis import static as ds
 from gyro_char.diagnosis.closed_form import ExpectedStats, residual_check, standardize
 from gyro_char.diagnosis.deterministic import has_mean_term
 from gyro_char.diagnosis.fit import EffectSpace, Param
-from gyro_char.diagnosis.kurtosis_choice import KurtosisCriterion
+from gyro_char.diagnosis.line_choice import LineCriterion
 from gyro_char.diagnosis.narrow_lines import LineCheck
 from gyro_char.diagnosis.spectra import model_spectrum
 import numpy as np
@@ -144,9 +144,11 @@ def closed_form_problem(records, dt, *, channel='gyro_x', max_samples=None,
             for i in range(len(recs))]
     problem.check = exp.calibrate(sims)
     problem.expect = exp
-    # Among significant candidates: the own-spread deviance plus the bands' kurtosis (a
-    # steady envelope is a line's or a wandering tone's, not a mode's: ``kurtosis_choice``).
-    problem.choose = KurtosisCriterion(problem.reals, problem.spaces, recs, dt, exp.spectrum)
     # Steady lines too narrow for the tone bands, checked once the search is done.
     problem.lines = LineCheck(recs[0], dt, exp.spectrum)
+    # Among significant candidates: the own-spread deviance plus the bands' kurtosis (a
+    # steady envelope is a line's or a wandering tone's, not a mode's: ``kurtosis_choice``)
+    # and the fine scan's lines (steady lines are a machine's: ``line_choice``).
+    problem.choose = LineCriterion(problem.reals, problem.spaces, recs, dt, exp.spectrum,
+                                   problem.lines)
     return problem

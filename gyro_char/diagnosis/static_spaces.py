@@ -17,7 +17,7 @@ from gyro_char.diagnosis.gate import gate_for_share, GateHolds
 from gyro_char.diagnosis.holds import repeat_excess, repeat_runs, REPEAT_Z
 from gyro_char.diagnosis.spectra import model_spectrum
 from gyro_char.diagnosis.starts import frame_start, FRAMES, markov_start
-from gyro_char.diagnosis.static_bands import resonance_space, vibration_space
+from gyro_char.diagnosis.static_bands import forest_start, resonance_space, vibration_space
 from gyro_char.sim.effects.base import CYCLE_HARMONICS
 import numpy as np
 
@@ -175,7 +175,10 @@ def static_spaces(base, x: np.ndarray,
         # line between bins spreads its power differently from one on a bin). Where the PSD
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
-                                     lines, levels, wander=wander),
+                                     lines, levels, wander=wander,
+                                     forest=forest_start(x, dt), spectrum=lambda eff: (
+                                         model_spectrum(base.N, base.lsb, dt, eff,
+                                                        bias=base.bias))),
         'resonance': resonance_space(sig_sample, f_tone, dt, bump),
     }
     # Holds: searched where the record repeats samples exactly beyond what its rounding does

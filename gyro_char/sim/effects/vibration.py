@@ -5,7 +5,7 @@ Vibration effects: a tone or a comb of lines (deterministic), a structural mode 
 spectra of the diagnosis. Axis-selecting parameters as in ``sensor`` (``base.axis_rows``).
 """
 from gyro_char.errors import InputError
-from gyro_char.sim.effects.base import axis_param, axis_rows, Effect, register
+from gyro_char.sim.effects.base import axis_param, axis_rows, describe_without, Effect, register
 from gyro_char.units import DEG
 import numpy as np
 from scipy import signal
@@ -17,8 +17,11 @@ COMB_SIDE = 200
 # Correlation time (s) of a tone's frequency wander where none is given.
 WANDER_S = 10.0
 # Tones in all: freq_hz and the unrelated freq2_hz ... freq<TONES>_hz (other machines, a
-# belt's second shaft, the sum and difference lines a nonlinear mount makes of two shafts).
-TONES = 6
+# belt's second shaft, the sum and difference lines a nonlinear mount makes of two shafts, a
+# forest of fans at fixed speeds). Tones beyond the first SHOWN are left out of describe()
+# where absent (earlier truth.json files).
+TONES = 32
+SHOWN = 6
 
 
 def vibration_lines(params: dict, f_max: float = np.inf) -> list:
@@ -64,8 +67,8 @@ class Vibration(Effect):
                '> 0, a periodic non-sinusoidal disturbance: lines at freq_hz + k spacing_hz, '
                'each of its own random phase, power amplitude^2 / 2 / (1 + (k spacing_hz / '
                'width_hz)^2) (knocks, kicks, gear-mesh sidebands, a frequency-modulated drive). '
-               'freq2_hz ... freq6_hz: further tones of their own amplitudes (other machines, '
-               'intermodulation lines). '
+               'freq2_hz ... freq32_hz: further tones of their own amplitudes (other machines, '
+               'intermodulation lines, a forest of fans). '
                'wander_hz > 0 (one tone): a machine whose speed is not held, the frequency '
                'freq_hz + wander_hz u(t), u a unit Gauss-Markov process of correlation time '
                "wander_s: the power spreads over a band (the frequency's own law when slow, a "
@@ -94,6 +97,10 @@ class Vibration(Effect):
         if self.wander_hz > 0 and self.spacing_hz > 0:
             raise InputError('vibration: wander_hz applies to one tone, not to a comb '
                              '(spacing_hz > 0)')
+
+    def describe(self):
+        return describe_without(self, *(key for j in range(SHOWN + 1, TONES + 1)
+                                        for key in (f'freq{j}_hz', f'amplitude{j}')))
 
     def lines(self, f_max: float = np.inf) -> list:
         """Return this vibration's (frequency, amplitude) lines below ``f_max``."""
