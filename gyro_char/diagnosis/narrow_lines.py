@@ -145,11 +145,10 @@ def narrow_lines(x: np.ndarray, dt: float, spec=None, *, report_p: float = REPOR
         f_all = np.fft.rfftfreq(scan['segment'], dt)
         made = model_excess(spec, f_all, dt, scan['segment'], scan['size'])[scan['keep']]
         for entry in found:
-            i = entry.pop('bin')
-            entry['model_excess'] = float(made[i])
-            entry['in_model'] = bool(made[i] >= MODEL_SHARE * entry['excess'])
+            entry['model_excess'] = float(made[entry['bin']])
+            entry['in_model'] = bool(entry['model_excess'] >= MODEL_SHARE * entry['excess'])
     for entry in found:
-        entry.pop('bin', None)
+        del entry['bin']
     found.sort(key=lambda d: d['p_value'])
     summary = {k: scan[k] for k in ('segment', 'resolution_hz', 'k_eff', 'tested_hz', 'bins')}
     return {**summary, 'report_p': report_p, 'lines': found[:MAX_REPORTED],

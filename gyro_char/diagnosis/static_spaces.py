@@ -86,10 +86,12 @@ def static_spaces(base, x: np.ndarray,
     df = 1.0 / (obs.welch_segment(n) * dt)
     lines, levels = obs.narrow_lines(x, dt, psd=psd)
     y = obs.detrend(x)
+
+    def spectrum(effects):          # the baseline's model spectrum with ``effects`` added
+        return model_spectrum(base.N, base.lsb, dt, effects, bias=base.bias)
     # A wandering tone only where the peak's band has a steadier envelope than noise: the
     # form can mimic a mode's band, which only the fourth moment tells apart.
-    wander = bool(tones.size) and steady_envelope(
-        y, dt, f_tone, model_spectrum(base.N, base.lsb, dt, [], bias=base.bias))
+    wander = bool(tones.size) and steady_envelope(y, dt, f_tone, spectrum([]))
     # Sign of a warm-up transient: early mean against the late mean of the detrended record.
     warm_sign = 1.0 if y[:max(n // 16, 1)].mean() >= y[n // 2:].mean() else -1.0
     # A transient that started mid-record: from the record's change point (the extremum of
@@ -176,9 +178,7 @@ def static_spaces(base, x: np.ndarray,
         # shows a comb of narrow lines, a comb about its strongest line is the alternative.
         'vibration': vibration_space(sig_sample, f_tone if tones.size else None, df, dt,
                                      lines, levels, wander=wander,
-                                     forest=forest_start(x, dt), spectrum=lambda eff: (
-                                         model_spectrum(base.N, base.lsb, dt, eff,
-                                                        bias=base.bias))),
+                                     forest=forest_start(x, dt), spectrum=spectrum),
         'resonance': resonance_space(sig_sample, f_tone, dt, bump),
     }
     # Holds: searched where the record repeats samples exactly beyond what its rounding does

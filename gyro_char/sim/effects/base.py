@@ -226,7 +226,7 @@ def cycle_terms(params: dict) -> list:
     Return a periodic bias as (amplitude, period, phase) sinusoids: the fundamental and harmonics.
 
     ``cycle_s`` is the fundamental's period; ``amplitude``/``phase`` its sinusoid, ``amplitudeK``
-    /``phaseK`` the K-th harmonic's (K = 2, 3), left out where their amplitude is 0. None
+    /``phaseK`` the K-th harmonic's (K = 2, 3), left out where their amplitude is 0. Empty
     where ``cycle_s`` is 0 (the bias is a transient then).
     """
     period = params.get('cycle_s', 0.0)
