@@ -24,9 +24,9 @@ CASES = {
     'time_delay_lag': ([('time_delay', {'delay_s': 4e-3, 'lag_s': 4e-3})], 'residual_psd'),
     'timestamp_jitter_tau': ([('timestamp_jitter', {'sigma_s': 1e-4, 'stream': 2.0,
                                                     'tau_s': 0.05})], 'rate_locked'),
-    # A smooth stamp error (a servo-slewed clock offset, 2 ms over 2 s): the gyro stamps'
+    # A smooth stamp error (a servo-slewed clock offset, 3 ms over 2 s): the gyro stamps'
     # phase in the encoder interval wanders, and with it the residual's increment correlation.
-    'timestamp_jitter_smooth': ([('timestamp_jitter', {'sigma_s': 2e-3, 'stream': 2.0,
+    'timestamp_jitter_smooth': ([('timestamp_jitter', {'sigma_s': 3e-3, 'stream': 2.0,
                                                        'tau_s': 2.0, 'order': 2.0})],
                                 'increment_acf'),
 }

@@ -46,7 +46,7 @@ import numpy as np
 SPAN_S = 60.0           # span of the noise-free effect runs (whole periods, at least 8)
 NOISE_EFFECTS = ('timestamp_jitter',)
 LINEAR = ('harm', 'scale')
-QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'acf')
+QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'acf', 'locked')
 NOISE_SPAN_S = 240.0    # span of the jitter's runs (at most the record)
 JITTER_GRID = 8         # stamp errors run, log-spaced from 0.2 % to 45 % of the intervals
 SMOOTH_GRID = (0.05, 20.0)  # a smooth stamp error's grid, in intervals (``_unit``)
@@ -160,11 +160,13 @@ class EffectParts:
                               if q in with_fx}}
 
     def _as_noise(self, i: int, part: dict, span_s: float) -> dict:
-        # Zero-mean linear parts; a noise's squared line amplitudes scale as 1 / length.
+        # Zero-mean linear parts; a noise's squared line amplitudes, and what it leaves in the
+        # phase-locked waveform, scale as 1 / length.
         b = self.bases[i]
         ratio = min(span_s or span(b), b.duration) / b.duration
         return {**part, 'harm': np.zeros_like(part['harm']), 'scale': 0.0, 'noise': True,
-                'line2': part['line2'] * ratio, 'mean2': part['mean2'] * ratio}
+                'line2': part['line2'] * ratio, 'mean2': part['mean2'] * ratio,
+                'locked': part['locked'] * ratio}
 
     def _lag_grid(self, i: int) -> np.ndarray:
         lo, hi, n = LAG_GRID
@@ -255,12 +257,28 @@ class EffectParts:
         return {q: (sigma ** 2 * ((1 - f) * lo[q] + f * hi[q]) if q in QUADRATIC else lo[q])
                 for q in lo}
 
+    def _bend(self, i: int, fx: dict) -> dict:
+        """
+        Return how a table on the sensed value changes the gyro noise's quadratic parts.
+
+        The table bends noise and signal alike (``on_output``): the noise comes out scaled by
+        the table's slope along the swing. Its parts under the table minus its parts without
+        (``_noise_alone``: the same realisation), as a noise part.
+        """
+        key = (i, 'unit bend ' + repr(fx))
+        if key not in self.cache:
+            bent, plain = self._noise_alone(i, [fx]), self._noise_alone(i, [])
+            part = {**plain, **{q: bent[q] - plain[q] for q in QUADRATIC}}
+            self.cache[key] = self._as_noise(i, part, NOISE_SPAN_S)
+        return self.cache[key]
+
     def part(self, i: int, effects: list) -> List[dict]:
         """Return D's raw parts on record ``i``: the deterministic effects', then noises'."""
         det = [fx for fx in effects if fx['name'] not in NOISE_EFFECTS]
         out = [self._single(i, det, False)] if det else []
         out += [self._lag(i, float(fx['params']['lag_s'])) for fx in det
                 if fx['name'] == 'time_delay' and fx['params'].get('lag_s', 0)]
+        out += [self._bend(i, fx) for fx in det if fx['params'].get('on_output', 0)]
         return out + [self._jitter(i, fx['params']) for fx in effects
                       if fx['name'] == 'timestamp_jitter' and fx['params'].get('sigma_s', 0)]
 

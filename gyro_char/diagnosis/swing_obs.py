@@ -13,8 +13,12 @@ gyro stamps), decomposed on the swing phase θ = ωt + ψ of the encoder's own s
   (``diagnosis.swing``);
 - ``harmonic_2f`` / ``harmonic_3f``: sin and cos of 2θ and 3θ (scale-factor asymmetry and the
   quadratic term give 2f, the cubic term 3f);
-- ``residual_psd``: log10 Welch PSD of the residual's rate (its difference over dt) in log bins
-  from 1 Hz to 1/8 of the sample rate (stamp jitter, encoder interpolation error, smoothing).
+- ``harmonic_high``: sin and cos of kθ for k = 4..16; ``locked_power``: log10 of the mean
+  square of the residual rate's phase-locked waveform in four bands beyond the 16th harmonic
+  (``swing_locked``: what a waveform's harmonics say it depends on);
+- ``residual_psd``: log10 Welch PSD of the residual's rate (its difference over dt) less its
+  phase-locked waveform, in log bins from 1 Hz to 1/8 of the sample rate (stamp jitter,
+  encoder interpolation error, smoothing: noise, not what repeats every period).
 
 The same fit, evaluated on the ENCODER stamps (gyro angle interpolated there), gives the
 residual the encoder's own errors show in at full encoder rate (``encoder_residual``):
@@ -45,9 +49,10 @@ record length instead of being spread over windows; the twins' repeats give the 
 from dataclasses import dataclass
 from typing import List, Optional, Tuple
 
+from gyro_char.diagnosis.swing_locked import (
+    band_psd, HIGH, high_harmonics, locked_bands, locked_edges, split_rate, unlocked)
 from gyro_char.swing.align import integrate
 import numpy as np
-from scipy import signal
 
 PSD_BINS = 10
 # Line-count bands (cycles per revolution) of ``encoder_lines``.
@@ -94,9 +99,13 @@ def layout(n_psd: int, dt: float, period_s: float) -> dict:
     # fall between encoder samples (linear interpolation), which says nothing about the gyro.
     edges = np.geomspace(1.0, 0.125 / dt, PSD_BINS + 1)
     lags = np.arange(1, ACF_LAGS + 1) * dt
+    high = np.repeat(np.arange(4, HIGH + 1) * f0, 2)
+    locked = locked_edges(f0, dt)
     return {'quadrature': np.array([[f0, f0]]),
             'harmonic_2f': np.array([[2 * f0, 2 * f0]] * 2),
             'harmonic_3f': np.array([[3 * f0, 3 * f0]] * 2),
+            'harmonic_high': np.c_[high, high],
+            'locked_power': np.c_[locked[:-1], locked[1:]],
             'residual_psd': np.c_[edges[:-1], edges[1:]],
             'encoder_lines': np.c_[LINE_EDGES[:-1], LINE_EDGES[1:]],
             'rate_locked': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
@@ -104,8 +113,8 @@ def layout(n_psd: int, dt: float, period_s: float) -> dict:
 
 
 UNITS = {'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
-         'residual_psd': 'Hz', 'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|',
-         'increment_acf': 's'}
+         'harmonic_high': 'Hz', 'locked_power': 'Hz', 'residual_psd': 'Hz',
+         'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|', 'increment_acf': 's'}
 
 
 def highpass(x: np.ndarray, n: int) -> np.ndarray:
@@ -188,9 +197,14 @@ def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
     return rate_locked_of(*rate_bins(th, d, peak_rate))
 
 
-def increment_sums(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
-    """Per-sample lagged products of the centred increments of ``r`` at lags 0..``lags``."""
-    d = np.diff(r)
+def increment_sums(r: np.ndarray, lags: int = ACF_LAGS, d: Optional[np.ndarray] = None
+                   ) -> np.ndarray:
+    """
+    Per-sample lagged products of the centred increments of ``r`` at lags 0..``lags``.
+
+    ``d``: the increments themselves (e.g. less their phase mean), instead of ``r``'s.
+    """
+    d = np.diff(r) if d is None else d
     d = d - d.mean()
     # einsum, not np.dot: a threaded BLAS call costs more than the sum on a busy machine.
     return np.array([np.einsum('i,i->', d[:d.size - k], d[k:]) / max(d.size, 1)
@@ -260,30 +274,17 @@ def residuals(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarra
                      w * float(np.hypot(ce[0], ce[1])))
 
 
-def band_psd(rate: np.ndarray, dt: float, ranges: dict) -> np.ndarray:
-    """Welch PSD of a residual rate, averaged in the ``residual_psd`` bands."""
-    f, p = signal.welch(rate, fs=1.0 / dt, nperseg=min(2048, rate.size // 8))
-    return np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
-                     else np.interp(0.5 * (a + b), f, p) for a, b in ranges['residual_psd']])
-
-
 def unlocked_psd(res: Residuals, ranges: dict) -> np.ndarray:
     """
     ``residual_psd`` of the residual rate less its mean at each phase of the swing.
 
-    That mean (one bin per sample of a period, over all the periods) is what the motion and
-    any effect locked to it leave every period alike; the rest is the sensors' noise, less
-    1 / (number of periods) of its power, on record and twins alike. The baseline's N is
-    pinned on it (``swing_calibrate.calibrate_n``): a sharp residual at every turning point (a dead
-    band) spreads over all Welch bins and would otherwise be read as gyro noise.
+    That mean (``swing_locked.split_rate``) is what the motion and any effect locked to it
+    leave every period alike; the rest is the sensors' noise, less 1 / (number of periods) of
+    its power, on record and twins alike. The baseline's N is pinned on it
+    (``swing_calibrate.calibrate_n``): a sharp residual at every turning point (a dead band)
+    spreads over all Welch bins and would otherwise be read as gyro noise.
     """
-    rate = np.diff(res.r) / res.dt
-    th = 0.5 * (res.th[1:] + res.th[:-1])
-    step = float(np.median(np.diff(res.th)))
-    per = max(int(round(2.0 * np.pi / max(step, 1e-12))), 1)
-    k = np.minimum((np.mod(th, 2.0 * np.pi) / (2.0 * np.pi) * per).astype(int), per - 1)
-    mean = np.bincount(k, rate, minlength=per) / np.maximum(np.bincount(k, minlength=per), 1)
-    return band_psd(rate - mean[k], res.dt, ranges)
+    return band_psd(split_rate(res.th, res.r, res.dt)[0], res.dt, ranges['residual_psd'])
 
 
 def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
@@ -300,9 +301,15 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     r = res.r if r is None else r
     r_e = res.r_e if r_e is None else r_e
     th, ts = res.th, res.ts
-    h = solve_columns([np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th),
-                       np.sin(3 * th), np.cos(3 * th), np.ones_like(ts), ts, ts * ts], r)
-    psd = band_psd(np.diff(r) / res.dt, res.dt, ranges)
+    cols = [np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
+            np.cos(3 * th), np.ones_like(ts), ts, ts * ts]
+    h = solve_columns(cols, r)
+    high = high_harmonics(th, r - sum(c * col for c, col in zip(h, cols)))
+    # The rate's part locked to the swing phase is the harmonic blocks' and locked_power's;
+    # the noise blocks see the rest (``swing_locked``).
+    rate_u, mean = split_rate(th, r, res.dt)
+    psd = band_psd(rate_u, res.dt, ranges['residual_psd'])
+    f0 = ranges['quadrature'][0][0]
     # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
     # large, deterministic, and the harmonic blocks' business - must not pass for noise here.
     hp_e = highpass(r_e, int(round(HP_SECONDS / res.dt_e)))
@@ -316,11 +323,17 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     # the gyro/encoder stamp pattern, which twins at rates differing by ppm do not share (z
     # of 3 on clean records): a constant, so that they score nothing.
     above = LINE_EDGES[1:] > np.pi / max(res.peak_rate * res.dt_e, 1e-300)
-    ms, w2 = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_e), res.peak_rate)
+    # The increments' noise only: what repeats every period is the harmonic blocks' (a sharp
+    # locked waveform's kinks read as a rate-locked stamp error; measured on a look-up
+    # table's residual, 216 sds in one rate bin).
+    th_e = 0.5 * (res.th_e[1:] + res.th_e[:-1])
+    ms, w2 = rate_bins(th_e, unlocked(th_e, np.diff(hp_e)), res.peak_rate)
+    hp = highpass(r, int(round(HP_SECONDS / res.dt)))
+    acf = increment_sums(hp, d=unlocked(0.5 * (th[1:] + th[:-1]), np.diff(hp)))
     # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
-    return {'harm': h[1:6], 'psd': psd, 'line2': peaks * peaks, 'mean2': mean2, 'where': where,
-            'above': above, 'ms': ms, 'w2': w2,
-            'acf': increment_sums(highpass(r, int(round(HP_SECONDS / res.dt))))}
+    return {'harm': np.r_[h[1:6], high], 'psd': psd, 'locked': locked_bands(mean, f0, res.dt),
+            'line2': peaks * peaks, 'mean2': mean2, 'where': where,
+            'above': above, 'ms': ms, 'w2': w2, 'acf': acf}
 
 
 def finish(raw: dict) -> 'SwingObs':
@@ -330,7 +343,8 @@ def finish(raw: dict) -> 'SwingObs':
     lines[raw['above']], where[raw['above']] = 0.0, np.nan
     c = raw['acf']
     out = SwingObs({'quadrature': raw['harm'][0:1], 'harmonic_2f': raw['harm'][1:3],
-                    'harmonic_3f': raw['harm'][3:5],
+                    'harmonic_3f': raw['harm'][3:5], 'harmonic_high': raw['harm'][5:],
+                    'locked_power': np.log10(np.maximum(raw['locked'], 1e-300)),
                     'residual_psd': np.log10(np.maximum(raw['psd'], 1e-300)),
                     'encoder_lines': lines,
                     'rate_locked': rate_locked_of(raw['ms'], raw['w2']),

@@ -8,9 +8,11 @@ count starts at the line the record's encoder residual shows (``signs``).
 from dataclasses import replace
 from typing import Callable, List, Optional, Sequence
 
-from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.fit import EffectSpace, LinearTerms, Param
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
 from gyro_char.diagnosis.swing_expect import LAG_GRID, SMOOTH_GRID
+from gyro_char.sim.effects.motion import EVEN_ORDERS, ODD_ORDERS, TILT_ORDERS
+from gyro_char.sim.effects.timing import SPEED_ORDERS
 import numpy as np
 
 G0 = 9.80665
@@ -97,8 +99,9 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
     as in ``diagnose.Problem``) the departures of all of them are projected together.
     The encoder cyclic error's line count is started at the records' line (``with_lines``).
     """
-    blocks = ('quadrature', 'harmonic_2f', 'harmonic_3f')
     idx = range(len(reals))
+    blocks = [b for b in ('quadrature', 'harmonic_2f', 'harmonic_3f', 'harmonic_high')
+              if all(b in reals[i] for i in idx)]
     base = [simulate(i, [], 4242) for i in idx]
     dev = np.concatenate([reals[i][b] - base[i][b] for i in idx for b in blocks])
     out = []
@@ -174,3 +177,64 @@ def unresolved_pairs(bases: Sequence[SwingBaseline], rel: float = 0.1) -> frozen
     if one([b.peak_rate for b in bases]):
         out.add(frozenset({'scale_factor_asymmetry', 'scale_factor_nonlinearity'}))
     return frozenset(out)
+
+
+# The tabulated forms (``sim.effects``): effect, range key, coefficient prefix, orders, what
+# else is fixed (the plain form's parameters at 0 beside the table, for their catalogue
+# defaults are not; where the table acts: the true rate, or the sensed value), and the plain
+# parameters solved with the table (a delay's constant part).
+TABLES = (('scale_factor_nonlinearity', 'table_rads', 'c', ODD_ORDERS, {'k2': 0.0}, ()),
+          ('scale_factor_nonlinearity', 'table_rads', 'c', ODD_ORDERS,
+           {'k2': 0.0, 'on_output': 1.0}, ()),
+          ('scale_factor_asymmetry', 'table_rads', 'c', EVEN_ORDERS, {'a': 0.0}, ()),
+          ('scale_factor_asymmetry', 'table_rads', 'c', EVEN_ORDERS,
+           {'a': 0.0, 'on_output': 1.0}, ()),
+          ('g_sensitivity', 'table_mps2', 't', TILT_ORDERS, {'gy': 0.0}, ()),
+          ('time_delay', 'table_rads', 'd', SPEED_ORDERS, {'lag_s': 0.0}, ('delay_s',)))
+TABLE_BLOCKS = ('quadrature', 'harmonic_2f', 'harmonic_3f', 'harmonic_high',
+                'scale_factor_shift')
+TABLE_MARGIN = 1.02   # the table's range over the records' largest peak rate or tilt
+TABLE_UNIT = 1e-4     # rad/s or s: a coefficient's probe runs (the blocks are linear in it)
+
+
+def with_tables(spaces: List[EffectSpace], bases: Sequence[SwingBaseline],
+                simulate: Callable[[int, list, int], dict]) -> List[EffectSpace]:
+    """
+    Give the rate- and tilt-shaped effects a tabulated alternative, solved by least squares.
+
+    A waveform the motion drives has harmonics far beyond what k2, k3, gy or one delay make
+    (a look-up table's residual, a companding law, a diode's one-sided knee, a flexure's
+    softening, a latency that grows with the speed); the table is a Chebyshev series over the
+    records' range of rate (odd for the nonlinearity, even for the asymmetry and the
+    latency) or of the tilt's specific force (odd, for the g-sensitivity).
+    Its harmonic blocks are linear in the coefficients: one probe run per coefficient and
+    record gives their change per unit (``LinearTerms``), and every fit solves the
+    coefficients on what the model leaves (``fit.solve_linear``).
+    """
+    rate = TABLE_MARGIN * max(b.peak_rate for b in bases)
+    tilt = TABLE_MARGIN * G0 * np.sin(max(b.amplitude for b in bases))
+    idx = range(len(bases))
+    zero = [simulate(i, [], 4242) for i in idx]
+    out = []
+    for sp in spaces:
+        tables = []
+        for name, key, prefix, orders, plain, lead in TABLES:
+            if name != sp.name:
+                continue
+            fixed = {**plain, key: rate if key == 'table_rads' else tilt}
+            names = lead + tuple(f'{prefix}{n}' for n in orders)
+            basis = []
+            for i in idx:
+                # The linear blocks see the table's deterministic part only: probed on the
+                # true rate, where or not the table acts on the sensed value.
+                probe = {**{k: v for k, v in fixed.items() if k != 'on_output'},
+                         **dict.fromkeys(names, 0.0)}
+                runs = [simulate(i, [(name, {**probe, n: TABLE_UNIT})], 4242) for n in names]
+                basis.append({b: np.array([(o[b] - zero[i][b]) / TABLE_UNIT for o in runs])
+                              for b in TABLE_BLOCKS if b in zero[i]})
+            tables.append(EffectSpace(name, [], fixed={**fixed, **dict.fromkeys(names, 0.0)},
+                                      estimated=names,
+                                      linear=LinearTerms(names, TABLE_BLOCKS, tuple(basis))))
+        out.append(replace(sp, alternatives=tuple(sp.alternatives) + tuple(tables))
+                   if tables else sp)
+    return out

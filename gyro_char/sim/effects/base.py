@@ -45,6 +45,7 @@ import zlib
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS
 import numpy as np
+from numpy.polynomial import chebyshev
 from scipy import signal
 
 
@@ -264,6 +265,28 @@ def add_truth_term(truth: dict, rows, term: str, value: float) -> None:
         ch = truth['channels'].get(GYRO_CHANNELS[r])
         if ch is not None:
             ch[term] = float(np.hypot(ch[term], value))
+
+
+def table_params(prefix: str, orders, unit: str, what: str) -> dict:
+    """``PARAMS`` entries of a tabulated form's coefficients (all 0 by default)."""
+    return {f'{prefix}{n}': (0.0, unit, f'Chebyshev coefficient of order {n} of the {what}')
+            for n in orders}
+
+
+def table(effect: Effect, prefix: str, orders, x: np.ndarray, span: float,
+          even: bool = False) -> np.ndarray:
+    """
+    Return sum c_n T_n(x / span) over ``orders`` (x clipped to the span), 0 without a span.
+
+    ``even``: each term less its value at 0, so that the table adds nothing at x = 0.
+    """
+    c = np.zeros(max(orders) + 1)
+    for n in orders:
+        c[n] = effect.params[f'{prefix}{n}']
+    if span <= 0.0 or not c.any():
+        return np.zeros_like(x)
+    out = chebyshev.chebval(np.clip(x / span, -1.0, 1.0), c)
+    return out - chebyshev.chebval(0.0, c) if even else out
 
 
 def describe_without(effect: Effect, *optional: str) -> dict:

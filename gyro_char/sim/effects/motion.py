@@ -6,9 +6,18 @@ so show mostly on swing runs. They leave the baseline truth unchanged: their sig
 harmonics or phase-locked residuals rather than a change of the reported coefficients.
 """
 from gyro_char.errors import InputError
+from gyro_char.sim.chain import G0
 from gyro_char.sim.config import AXES
-from gyro_char.sim.effects.base import describe_without, Effect, one_pole, register
+from gyro_char.sim.effects.base import (describe_without, Effect, one_pole, register, table,
+                                        table_params)
 import numpy as np
+
+# Orders of the tabulated forms (Chebyshev series over a table's range): odd in the rate for
+# the nonlinearity (order 1 is the scale factor itself), even for the asymmetry (order 0 is a
+# bias), odd in the tilt for the g-sensitivity (order 1 is gy's shape).
+ODD_ORDERS = (3, 5, 7, 9, 11, 13, 15)
+EVEN_ORDERS = (2, 4, 6, 8, 10, 12, 14, 16)
+TILT_ORDERS = (1, 3, 5, 7, 9, 11, 13, 15)
 
 
 @register
@@ -30,28 +39,41 @@ class ScaleFactorNonlinearity(Effect):
                'lock_in > 0: the response collapses near zero rate, as a ring laser locks in '
                '(IEEE 528 dead band / lock-in rate; the averaged Adler law): omega_out = '
                'sign(omega) sqrt(omega^2 - lock_in^2) outside the band, 0 inside; odd lines '
-               'that a cubic cannot follow, made at the turning points.')
+               'that a cubic cannot follow, made at the turning points. table_rads > 0: a '
+               'tabulated odd deviation of any shape over +-table_rads, omega_out += sum_n '
+               'c_n T_n(omega / table_rads), n = 3, 5, ..., 15 (a companding law, a look-up '
+               'table residual, a DAC staircase, a soft saturation): on a swing of peak '
+               'table_rads, c_n is the rate line at n f. on_output 1: the table bends the '
+               'sensed value, noise included (the law of a read-out), not the true rate: its '
+               'slope modulates the noise along the swing.')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
               'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient'),
               'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient'),
               'tau_s': (0.0, 's', 'thermal lag of the cubic term (0: memoryless)'),
-              'lock_in': (0.0, 'rad/s', 'lock-in rate: no output below it (0: none)')}
+              'lock_in': (0.0, 'rad/s', 'lock-in rate: no output below it (0: none)'),
+              'table_rads': (0.0, 'rad/s', 'range of the tabulated deviation (0: none)'),
+              'on_output': (0.0, '1', '1: the table acts on the sensed value, noise included'),
+              **table_params('c', ODD_ORDERS, 'rad/s', 'tabulated deviation')}
 
     def check(self):
-        if self.tau_s < 0 or self.lock_in < 0:
-            raise InputError('scale_factor_nonlinearity: tau_s and lock_in must be >= 0')
+        if self.tau_s < 0 or self.lock_in < 0 or self.table_rads < 0:
+            raise InputError('scale_factor_nonlinearity: tau_s, lock_in and table_rads must '
+                             'be >= 0')
 
     def describe(self):
-        return describe_without(self, 'tau_s', 'lock_in')
+        return describe_without(self, 'tau_s', 'lock_in', 'table_rads', 'on_output',
+                                *(f'c{n}' for n in ODD_ORDERS))
 
     def sensor(self, ctx, gyro, accel):
         w = ctx.true_rate
         w2 = w * w
+        sensed = gyro
         heat = one_pole(w2, self.tau_s, ctx.dt_internal, start='periodic')
         gyro = gyro + w2 * (self.k2 + self.k5 * w * w2) + self.k3 * w * heat
         if self.lock_in > 0.0:
             gyro = gyro + np.sign(w) * np.sqrt(np.maximum(w2 - self.lock_in ** 2, 0.0)) - w
-        return gyro, accel
+        x = sensed if self.on_output else w
+        return gyro + table(self, 'c', ODD_ORDERS, x, self.table_rads), accel
 
 
 @register
@@ -64,21 +86,32 @@ class ScaleFactorAsymmetry(Effect):
                'even harmonics (2f: 4 a W / (3 pi)); no change at f. tau_s > 0: the gain '
                'relaxes to its new side after each reversal (a direction memory, as the '
                'after-effect of a torquer magnet), omega_out += a omega LP(sign omega): the '
-               '2f line turns partly into quadrature and falls; still no line at f.')
+               '2f line turns partly into quadrature and falls; still no line at f. '
+               'table_rads > 0: a tabulated even difference of any shape over +-table_rads, '
+               'omega_out += sum_n c_n (T_n(omega / table_rads) - T_n(0)), n = 2, 4, ..., 16 '
+               '(a one-sided gain, a diode, a driver half that saturates first): on a swing '
+               'of peak table_rads, c_n is the rate line at n f; on_output 1: it bends the '
+               'sensed value, noise included.')
     PARAMS = {'a': (1.0e-3, '1', 'half the difference of the two scale factors'),
-              'tau_s': (0.0, 's', 'relaxation time of the switch after a reversal (0: at once)')}
+              'tau_s': (0.0, 's', 'relaxation time of the switch after a reversal (0: at once)'),
+              'table_rads': (0.0, 'rad/s', 'range of the tabulated difference (0: none)'),
+              'on_output': (0.0, '1', '1: the table acts on the sensed value, noise included'),
+              **table_params('c', EVEN_ORDERS, 'rad/s', 'tabulated difference')}
 
     def check(self):
-        if self.tau_s < 0:
-            raise InputError('scale_factor_asymmetry: tau_s must be >= 0')
+        if self.tau_s < 0 or self.table_rads < 0:
+            raise InputError('scale_factor_asymmetry: tau_s and table_rads must be >= 0')
 
     def describe(self):
-        return describe_without(self, 'tau_s')
+        return describe_without(self, 'tau_s', 'table_rads', 'on_output',
+                                *(f'c{n}' for n in EVEN_ORDERS))
 
     def sensor(self, ctx, gyro, accel):
         w = ctx.true_rate   # w sign(w) is |w| exactly: tau_s 0 is the switch at once
         side = one_pole(np.sign(w), self.tau_s, ctx.dt_internal, start='periodic')
-        return gyro + self.a * w * side, accel
+        extra = table(self, 'c', EVEN_ORDERS, gyro if self.on_output else w, self.table_rads,
+                      even=True)
+        return gyro + self.a * w * side + extra, accel
 
 
 @register
@@ -112,14 +145,30 @@ class GSensitivity(Effect):
     physics = ('omega_out_i += gx f_x + gy f_y + gz f_z on every gyro axis (f: specific force '
                'in the sensor frame, m/s^2). Datasheet: 0.05 deg/s/g for the ADIS16405, '
                '~9e-5 rad/s per m/s^2. On a stand tilting about x, f_y = g sin(phi): a '
-               'residual in phase with the angle (like a delay would be with the rate).')
+               'residual in phase with the angle (like a delay would be with the rate). '
+               'table_mps2 > 0: a tabulated bias of any odd shape in the specific force of '
+               'the tilt across the swing axis, f_t = g sin(phi): += sum_n t_n T_n(f_t / '
+               'table_mps2), n = 1, 3, ..., 15 (a softening flexure, a coarse compensation '
+               'table, a wavy suspension).')
     PARAMS = {'gx': (0.0, 'rad/s/(m/s^2)', 'sensitivity to f_x'),
               'gy': (9.0e-5, 'rad/s/(m/s^2)', 'sensitivity to f_y'),
-              'gz': (0.0, 'rad/s/(m/s^2)', 'sensitivity to f_z')}
+              'gz': (0.0, 'rad/s/(m/s^2)', 'sensitivity to f_z'),
+              'table_mps2': (0.0, 'm/s^2', 'range of the tabulated bias (0: none)'),
+              **table_params('t', TILT_ORDERS, 'rad/s', 'tabulated bias')}
+
+    def check(self):
+        if self.table_mps2 < 0:
+            raise InputError('g_sensitivity: table_mps2 must be >= 0')
+
+    def describe(self):
+        return describe_without(self, 'table_mps2', *(f't{n}' for n in TILT_ORDERS))
 
     def sensor(self, ctx, gyro, accel):
         f = ctx.specific_force
         extra = self.gx * f[0] + self.gy * f[1] + self.gz * f[2]
+        if self.table_mps2 > 0.0 and ctx.angle is not None:
+            extra = extra + table(self, 't', TILT_ORDERS, G0 * np.sin(ctx.angle),
+                                  self.table_mps2)
         return gyro + extra[None, :], accel
 
 

@@ -13,8 +13,10 @@ smooth second-order one: a clock offset slewed by a time-sync servo).
 from gyro_char.errors import InputError
 from gyro_char.sim.chain import JITTER_CLIP
 from gyro_char.sim.effects.base import (describe_without, Effect, markov, one_pole, register,
-                                        second_order_gm)
+                                        second_order_gm, table, table_params)
 import numpy as np
+
+SPEED_ORDERS = (2, 4, 6, 8, 10, 12, 14)   # orders of the speed-dependent latency
 
 
 @register
@@ -31,22 +33,32 @@ class TimeDelay(Effect):
                'low-pass inside the gyro (time constant lag_s, backward-Euler form whose '
                'low-frequency delay is lag_s) on every gyro axis, motion and noise alike '
                '(it attenuates and colours the noise above 1 / (2 pi lag_s)); the stamps '
-               'then carry the rest, delay_s - lag_s. lag_s = delay_s: a pure gyro filter.')
+               'then carry the rest, delay_s - lag_s. lag_s = delay_s: a pure gyro filter. '
+               'table_rads > 0: the stamp latency also depends on the speed, + sum_n d_n '
+               '(T_n(omega / table_rads) - T_n(0)), n = 2, 4, ..., 14 (a driver whose work '
+               'grows with the rate, a smoother that adapts to the motion): an even function '
+               'of the true rate omega when the sample was taken.')
     PARAMS = {'delay_s': (1.0e-3, 's', 'total latency: stamp shift plus the lag'),
-              'lag_s': (0.0, 's', 'part of delay_s that is a one-pole gyro lag (>= 0)')}
+              'lag_s': (0.0, 's', 'part of delay_s that is a one-pole gyro lag (>= 0)'),
+              'table_rads': (0.0, 'rad/s', 'range of the speed-dependent latency (0: none)'),
+              **table_params('d', SPEED_ORDERS, 's', 'speed-dependent latency')}
 
     def check(self):
-        if self.lag_s < 0:
-            raise InputError('time_delay: lag_s >= 0')
+        if self.lag_s < 0 or self.table_rads < 0:
+            raise InputError('time_delay: lag_s and table_rads must be >= 0')
 
     def describe(self):
-        return describe_without(self, 'lag_s')
+        return describe_without(self, 'lag_s', 'table_rads', *(f'd{n}' for n in SPEED_ORDERS))
 
     def output(self, ctx, gyro, accel):
         return one_pole(gyro, self.lag_s, ctx.dt), accel
 
     def stamps(self, ctx, t):
-        return t + (self.delay_s - self.lag_s)
+        late = t + (self.delay_s - self.lag_s)
+        if self.table_rads > 0.0 and ctx.true_rate is not None:
+            rate = np.interp(t, ctx.t, ctx.true_rate[ctx.axis])
+            late = late + table(self, 'd', SPEED_ORDERS, rate, self.table_rads, even=True)
+        return late
 
 
 # A correlated stamp error whose steps stay under this share of the sample interval (sd) is

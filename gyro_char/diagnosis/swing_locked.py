@@ -1,0 +1,111 @@
+"""
+The swing residual split into its part locked to the swing phase and the rest.
+
+Whatever the motion drives - a scale factor that depends on the rate, a bias that depends on
+the tilt, a lag, an encoder error along the angle - repeats every swing period: it is a
+waveform of the phase θ, the same on every pass. The gyro's and the encoder's noise do not
+repeat. The diagnosis scores the two apart:
+
+- ``high_harmonics``: the angle residual's sin kθ and cos kθ for k = 4..``HIGH`` (the first
+  three are the quadrature and harmonic blocks). Which of the four families a waveform's
+  harmonics fall in says what it depends on: a rate error odd in the rate leaves sin kθ of
+  odd k, one even in the rate sin kθ of even k, a bias odd in the tilt and a lag cos kθ of
+  odd k, a direction memory cos kθ of even k;
+- ``phase_mean``: the residual rate's mean at each phase (one bin a sample of the period),
+  whose spectrum beyond harmonic ``HIGH`` gives the locked power per band
+  (``locked_bands``: sharp turning points, staircases, a dead band), and whose removal leaves
+  the unlocked rate (``unlocked_psd``) that the noise blocks score. Before, a locked waveform's
+  5th-16th harmonics sat in the lowest PSD bins as if they were noise, where a stamp jitter
+  or an encoder error took them.
+"""
+from typing import Tuple
+
+import numpy as np
+from scipy import signal
+
+HIGH = 16          # highest harmonic scored one by one
+LOCKED_BANDS = 4   # bands of locked power beyond HIGH, log-spaced up to 1/8 of the rate
+
+
+def high_harmonics(th: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """
+    Return the sin kθ and cos kθ coefficients of ``r`` for k = 4..``HIGH`` (sin, cos, ...).
+
+    Least squares on each pair alone (its own 2 x 2 normal equations): over a record of many
+    periods the pairs are orthogonal to each other and to the lower harmonics and trends to
+    about one over the number of periods, and whatever leaks is the same linear map on
+    record and twins. The powers of e^iθ are built by repeated products (no trigonometry).
+    """
+    z1 = np.exp(1j * th)
+    zk = z1 ** 3
+    out = np.empty(2 * (HIGH - 3))
+    for j in range(HIGH - 3):
+        zk = zk * z1
+        s, c = zk.imag, zk.real
+        ss, cc, sc = (float(np.einsum('i,i->', s, s)), float(np.einsum('i,i->', c, c)),
+                      float(np.einsum('i,i->', s, c)))
+        ys, yc = float(np.einsum('i,i->', s, r)), float(np.einsum('i,i->', c, r))
+        det = ss * cc - sc * sc
+        out[2 * j] = (cc * ys - sc * yc) / det if det > 0 else 0.0
+        out[2 * j + 1] = (ss * yc - sc * ys) / det if det > 0 else 0.0
+    return out
+
+
+def phase_mean(th: np.ndarray, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """
+    Return the mean of ``x`` at each phase (one bin a sample of the period) and each bin.
+
+    ``th`` are the phases of the samples of ``x``; the bin count is the period in samples.
+    """
+    step = float(np.median(np.diff(th))) if th.size > 1 else 1.0
+    per = max(int(round(2.0 * np.pi / max(step, 1e-12))), 1)
+    k = np.minimum((np.mod(th, 2.0 * np.pi) / (2.0 * np.pi) * per).astype(int), per - 1)
+    mean = np.bincount(k, x, minlength=per) / np.maximum(np.bincount(k, minlength=per), 1)
+    return mean, k
+
+
+def locked_edges(f0: float, dt: float) -> np.ndarray:
+    """Band edges (Hz) of the locked power beyond harmonic ``HIGH``: up to 1/8 of the rate."""
+    lo = (HIGH + 0.5) * f0
+    return np.geomspace(lo, max(0.125 / dt, 2.0 * lo), LOCKED_BANDS + 1)
+
+
+def locked_bands(mean: np.ndarray, f0: float, dt: float) -> np.ndarray:
+    """
+    Return the locked waveform's mean-square rate per band of ``locked_edges`` ((rad/s)²).
+
+    ``mean`` is the phase mean of the residual rate over one period; its harmonic k carries
+    2 |X_k / n|² of mean square. What the noise leaves in the phase mean (its variance over
+    the number of periods) is a floor that the twins share.
+    """
+    n = mean.size
+    power = 2.0 * np.abs(np.fft.rfft(mean) / n) ** 2
+    f = f0 * np.arange(power.size)
+    edges = locked_edges(f0, dt)
+    band = np.digitize(f, edges) - 1
+    inside = (band >= 0) & (band < LOCKED_BANDS)
+    return np.bincount(band[inside], power[inside], minlength=LOCKED_BANDS)
+
+
+def band_psd(rate: np.ndarray, dt: float, edges: np.ndarray) -> np.ndarray:
+    """Welch PSD of a residual rate, averaged in the bands ``edges`` ((lo, hi) rows, Hz)."""
+    f, p = signal.welch(rate, fs=1.0 / dt, nperseg=min(2048, rate.size // 8))
+    return np.array([np.mean(p[(f >= a) & (f < b)]) if np.any((f >= a) & (f < b))
+                     else np.interp(0.5 * (a + b), f, p) for a, b in edges])
+
+
+def split_rate(th: np.ndarray, r: np.ndarray, dt: float) -> Tuple[np.ndarray, np.ndarray]:
+    """
+    Return the residual rate less its phase mean, and that phase mean (one period).
+
+    The rate is the residual's difference over ``dt``, at the mid phases of the samples.
+    """
+    rate = np.diff(r) / dt
+    mean, k = phase_mean(0.5 * (th[1:] + th[:-1]), rate)
+    return rate - mean[k], mean
+
+
+def unlocked(th: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Return ``x`` less its phase mean (``th``: the phases of its samples)."""
+    mean, k = phase_mean(th, x)
+    return x - mean[k]
