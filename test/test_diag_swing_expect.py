@@ -29,6 +29,13 @@ CASES = {
     'timestamp_jitter_smooth': ([('timestamp_jitter', {'sigma_s': 3e-3, 'stream': 2.0,
                                                        'tau_s': 2.0, 'order': 2.0})],
                                 'increment_acf'),
+    # Tabulated forms: a read-out law on the sensed value (it bends the noise: rate_locked and
+    # the PSD see the slope) and a latency that grows with the speed.
+    'scale_factor_nonlinearity_sensed': ([('scale_factor_nonlinearity', {
+        'k2': 0.0, 'table_rads': 0.5, 'c3': 0.01, 'c7': -0.004, 'on_output': 1.0})],
+        'harmonic_high'),
+    'time_delay_speed': ([('time_delay', {'delay_s': 0.0, 'table_rads': 0.46, 'd2': 2e-3,
+                                          'd4': -5e-4})], 'harmonic_3f'),
 }
 # rms over a block's elements of (pseudo-twins' mean - twins' mean) / standard error of that
 # difference.

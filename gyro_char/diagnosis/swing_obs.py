@@ -14,11 +14,11 @@ gyro stamps), decomposed on the swing phase θ = ωt + ψ of the encoder's own s
 - ``harmonic_2f`` / ``harmonic_3f``: sin and cos of 2θ and 3θ (scale-factor asymmetry and the
   quadratic term give 2f, the cubic term 3f);
 - ``harmonic_high``: sin and cos of kθ for k = 4..16; ``locked_power``: log10 of the mean
-  square of the residual rate's phase-locked waveform in four bands beyond the 16th harmonic
-  (``swing_locked``: what a waveform's harmonics say it depends on);
+  square of the residual rate's phase mean in four bands beyond the 16th harmonic, up to
+  2 % of the sample rate (``swing_locked``: what a waveform's harmonics say it depends on);
 - ``residual_psd``: log10 Welch PSD of the residual's rate (its difference over dt) less its
-  phase-locked waveform, in log bins from 1 Hz to 1/8 of the sample rate (stamp jitter,
-  encoder interpolation error, smoothing: noise, not what repeats every period).
+  harmonics 1..16, in log bins from 1 Hz to 1/8 of the sample rate (stamp jitter, encoder
+  interpolation error, smoothing: noise, not the waveform the harmonic blocks score).
 
 The same fit, evaluated on the ENCODER stamps (gyro angle interpolated there), gives the
 residual the encoder's own errors show in at full encoder rate (``encoder_residual``):
@@ -31,13 +31,15 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
   interval) (7100 lines at 1 kHz on a 0.44 rad/s swing) read 0 (log10 of 1: not measured).
   The peak's line count per band is kept unscored (``SwingObs.line_peaks``) for
   ``diagnosis.swing_spaces.signs``;
-- ``rate_locked``: the (high-passed) residual's increment variance in bins of |cos θ| (i.e.
+- ``rate_locked``: the (high-passed) residual's increment variance, its harmonics 1..16 out,
+  in bins of |cos θ| (i.e.
   of the swing rate) minus that of the slowest bin, per unit of rate² (``rate_locked``). An
   encoder stamp error δ reads as an angle error rate · δ, a noise whose variance grows as the
   rate squared; the gyro's white noise, the quantizations and the encoder's white noise do
   not depend on the swing phase;
 - ``increment_acf``: normalised autocorrelation at lags 1..4 of the GYRO-stamp residual's
-  increments (high-passed like the encoder-stamp one). This is the residual's whiteness, not
+  increments (harmonics 1..16 out and high-passed like the encoder-stamp one). This is the
+  residual's whiteness, not
   the swing filter's innovations (``swing.batch`` folds rows into a square-root information
   factor and never forms them); for the gyro stream the two differ by the fitted
   deterministic part only. Colouring of the gyro noise (a sensor FIR such as a fractional
@@ -50,7 +52,7 @@ from dataclasses import dataclass
 from typing import List, Optional, Tuple
 
 from gyro_char.diagnosis.swing_locked import (
-    band_psd, HIGH, high_harmonics, locked_bands, locked_edges, split_rate, unlocked)
+    band_psd, HIGH, high_harmonics, locked_bands, locked_edges, phase_mean, split_rate, wave)
 from gyro_char.swing.align import integrate
 import numpy as np
 
@@ -197,14 +199,9 @@ def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
     return rate_locked_of(*rate_bins(th, d, peak_rate))
 
 
-def increment_sums(r: np.ndarray, lags: int = ACF_LAGS, d: Optional[np.ndarray] = None
-                   ) -> np.ndarray:
-    """
-    Per-sample lagged products of the centred increments of ``r`` at lags 0..``lags``.
-
-    ``d``: the increments themselves (e.g. less their phase mean), instead of ``r``'s.
-    """
-    d = np.diff(r) if d is None else d
+def increment_sums(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
+    """Per-sample lagged products of the centred increments of ``r`` at lags 0..``lags``."""
+    d = np.diff(r)
     d = d - d.mean()
     # einsum, not np.dot: a threaded BLAS call costs more than the sum on a busy machine.
     return np.array([np.einsum('i,i->', d[:d.size - k], d[k:]) / max(d.size, 1)
@@ -304,11 +301,15 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     cols = [np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
             np.cos(3 * th), np.ones_like(ts), ts, ts * ts]
     h = solve_columns(cols, r)
-    high = high_harmonics(th, r - sum(c * col for c, col in zip(h, cols)))
-    # The rate's part locked to the swing phase is the harmonic blocks' and locked_power's;
-    # the noise blocks see the rest (``swing_locked``).
-    rate_u, mean = split_rate(th, r, res.dt)
+    low = r - sum(c * col for c, col in zip(h, cols))
+    high = high_harmonics(th, low)
+    # What the harmonic blocks score is not the noise blocks' (``swing_locked``): they see the
+    # residuals less the harmonics 1..16, at each stream's own phases.
+    r_u = low - wave(th, np.zeros(6), high)
+    r_eu = r_e - wave(res.th_e, h[:6], high)
+    rate_u = np.diff(r_u) / res.dt
     psd = band_psd(rate_u, res.dt, ranges['residual_psd'])
+    mean = phase_mean(0.5 * (th[1:] + th[:-1]), rate_u)[0]
     f0 = ranges['quadrature'][0][0]
     # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
     # large, deterministic, and the harmonic blocks' business - must not pass for noise here.
@@ -323,13 +324,9 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     # the gyro/encoder stamp pattern, which twins at rates differing by ppm do not share (z
     # of 3 on clean records): a constant, so that they score nothing.
     above = LINE_EDGES[1:] > np.pi / max(res.peak_rate * res.dt_e, 1e-300)
-    # The increments' noise only: what repeats every period is the harmonic blocks' (a sharp
-    # locked waveform's kinks read as a rate-locked stamp error; measured on a look-up
-    # table's residual, 216 sds in one rate bin).
-    th_e = 0.5 * (res.th_e[1:] + res.th_e[:-1])
-    ms, w2 = rate_bins(th_e, unlocked(th_e, np.diff(hp_e)), res.peak_rate)
-    hp = highpass(r, int(round(HP_SECONDS / res.dt)))
-    acf = increment_sums(hp, d=unlocked(0.5 * (th[1:] + th[:-1]), np.diff(hp)))
+    hp_eu = highpass(r_eu, int(round(HP_SECONDS / res.dt_e)))
+    ms, w2 = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_eu), res.peak_rate)
+    acf = increment_sums(highpass(r_u, int(round(HP_SECONDS / res.dt))))
     # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
     return {'harm': np.r_[h[1:6], high], 'psd': psd, 'locked': locked_bands(mean, f0, res.dt),
             'line2': peaks * peaks, 'mean2': mean2, 'where': where,

@@ -193,7 +193,10 @@ TABLES = (('scale_factor_nonlinearity', 'table_rads', 'c', ODD_ORDERS, {'k2': 0.
           ('time_delay', 'table_rads', 'd', SPEED_ORDERS, {'lag_s': 0.0}, ('delay_s',)))
 TABLE_BLOCKS = ('quadrature', 'harmonic_2f', 'harmonic_3f', 'harmonic_high',
                 'scale_factor_shift')
-TABLE_MARGIN = 1.02   # the table's range over the records' largest peak rate or tilt
+# The table's range over the records' largest peak rate or tilt: just beyond, so that on a
+# swing of that peak T_n(u) is nearly cos n theta (a wider range leaves the scale factor a
+# near-null combination of the coefficients, which the least squares then blow up).
+TABLE_MARGIN = 1.02
 TABLE_UNIT = 1e-4     # rad/s or s: a coefficient's probe runs (the blocks are linear in it)
 
 

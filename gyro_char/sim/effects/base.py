@@ -274,19 +274,27 @@ def table_params(prefix: str, orders, unit: str, what: str) -> dict:
 
 
 def table(effect: Effect, prefix: str, orders, x: np.ndarray, span: float,
-          even: bool = False) -> np.ndarray:
+          even: bool = False, sensed: Optional[np.ndarray] = None) -> np.ndarray:
     """
     Return sum c_n T_n(x / span) over ``orders`` (x clipped to the span), 0 without a span.
 
     ``even``: each term less its value at 0, so that the table adds nothing at x = 0.
+    ``sensed``: the table bends the sensed value rather than ``x`` (the true input): to first
+    order in the difference, table(x) + table'(x) (sensed - x), so that the noise comes out
+    scaled by the slope where the input is, however far the noise reaches past the span.
     """
     c = np.zeros(max(orders) + 1)
     for n in orders:
         c[n] = effect.params[f'{prefix}{n}']
     if span <= 0.0 or not c.any():
         return np.zeros_like(x)
-    out = chebyshev.chebval(np.clip(x / span, -1.0, 1.0), c)
-    return out - chebyshev.chebval(0.0, c) if even else out
+    u = np.clip(x / span, -1.0, 1.0)
+    out = chebyshev.chebval(u, c)
+    if even:
+        out = out - chebyshev.chebval(0.0, c)
+    if sensed is not None:
+        out = out + chebyshev.chebval(u, chebyshev.chebder(c)) / span * (sensed - x)
+    return out
 
 
 def describe_without(effect: Effect, *optional: str) -> dict:

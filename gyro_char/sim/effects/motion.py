@@ -45,7 +45,8 @@ class ScaleFactorNonlinearity(Effect):
                'table residual, a DAC staircase, a soft saturation): on a swing of peak '
                'table_rads, c_n is the rate line at n f. on_output 1: the table bends the '
                'sensed value, noise included (the law of a read-out), not the true rate: its '
-               'slope modulates the noise along the swing.')
+               'slope where the rate is scales the noise along the swing (first order in the '
+               'noise).')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
               'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient'),
               'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient'),
@@ -72,8 +73,8 @@ class ScaleFactorNonlinearity(Effect):
         gyro = gyro + w2 * (self.k2 + self.k5 * w * w2) + self.k3 * w * heat
         if self.lock_in > 0.0:
             gyro = gyro + np.sign(w) * np.sqrt(np.maximum(w2 - self.lock_in ** 2, 0.0)) - w
-        x = sensed if self.on_output else w
-        return gyro + table(self, 'c', ODD_ORDERS, x, self.table_rads), accel
+        return gyro + table(self, 'c', ODD_ORDERS, w, self.table_rads,
+                            sensed=sensed if self.on_output else None), accel
 
 
 @register
@@ -109,8 +110,8 @@ class ScaleFactorAsymmetry(Effect):
     def sensor(self, ctx, gyro, accel):
         w = ctx.true_rate   # w sign(w) is |w| exactly: tau_s 0 is the switch at once
         side = one_pole(np.sign(w), self.tau_s, ctx.dt_internal, start='periodic')
-        extra = table(self, 'c', EVEN_ORDERS, gyro if self.on_output else w, self.table_rads,
-                      even=True)
+        extra = table(self, 'c', EVEN_ORDERS, w, self.table_rads, even=True,
+                      sensed=gyro if self.on_output else None)
         return gyro + self.a * w * side + extra, accel
 
 
