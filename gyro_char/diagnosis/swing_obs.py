@@ -32,18 +32,16 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
   The peak's line count per band is kept unscored (``SwingObs.line_peaks``) for
   ``diagnosis.swing_spaces.signs``;
 - ``rate_locked``: the (high-passed) residual's increment variance, its harmonics 1..16 out,
-  in bins of |cos θ| (i.e.
-  of the swing rate) minus that of the slowest bin, per unit of rate² (``rate_locked``). An
-  encoder stamp error δ reads as an angle error rate · δ, a noise whose variance grows as the
-  rate squared; the gyro's white noise, the quantizations and the encoder's white noise do
-  not depend on the swing phase;
+  in bins of |cos θ| (i.e. of the swing rate) minus that of the slowest bin, per unit of
+  rate² (``rate_locked``). An encoder stamp error δ reads as an angle error rate · δ, a noise
+  whose variance grows as the rate squared; the gyro's white noise, the quantizations and
+  the encoder's white noise do not depend on the swing phase;
 - ``increment_acf``: normalised autocorrelation at lags 1..4 of the GYRO-stamp residual's
   increments (harmonics 1..16 out and high-passed like the encoder-stamp one). This is the
-  residual's whiteness, not
-  the swing filter's innovations (``swing.batch`` folds rows into a square-root information
-  factor and never forms them); for the gyro stream the two differ by the fitted
-  deterministic part only. Colouring of the gyro noise (a sensor FIR such as a fractional
-  group delay, smoothing) shows here.
+  residual's whiteness, not the swing filter's innovations (``swing.batch`` folds rows into
+  a square-root information factor and never forms them); for the gyro stream the two
+  differ by the fitted deterministic part only. Colouring of the gyro noise (a sensor FIR
+  such as a fractional group delay, smoothing) shows here.
 
 Whole-record components rather than per-window ones: a constant effect's z grows with the
 record length instead of being spread over windows; the twins' repeats give the scatter.
