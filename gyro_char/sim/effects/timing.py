@@ -58,6 +58,9 @@ class TimeDelay(Effect):
         if self.table_rads > 0.0 and ctx.true_rate is not None:
             rate = np.interp(t, ctx.t, ctx.true_rate[ctx.axis])
             late = late + table(self, 'd', SPEED_ORDERS, rate, self.table_rads, even=True)
+            # A latency falling faster than time passes would reorder the samples: a driver
+            # still sends them in order, at least a tenth of an interval apart.
+            late = increasing(late, 0.1 * ctx.dt)
         return late
 
 
