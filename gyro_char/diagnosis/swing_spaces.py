@@ -218,6 +218,19 @@ def with_tables(spaces: List[EffectSpace], bases: Sequence[SwingBaseline],
     tilt = TABLE_MARGIN * G0 * np.sin(max(b.amplitude for b in bases))
     idx = range(len(bases))
     zero = [simulate(i, [], 4242) for i in idx]
+    probed = {}
+
+    def basis(name: str, probe: dict, names: tuple) -> tuple:
+        key = (name, repr(sorted(probe.items())))
+        if key not in probed:
+            out = []
+            for i in idx:
+                runs = [simulate(i, [(name, {**probe, n: TABLE_UNIT})], 4242) for n in names]
+                out.append({b: np.array([(o[b] - zero[i][b]) / TABLE_UNIT for o in runs])
+                            for b in TABLE_BLOCKS if b in zero[i]})
+            probed[key] = tuple(out)
+        return probed[key]
+
     out = []
     for sp in spaces:
         tables = []
@@ -226,18 +239,13 @@ def with_tables(spaces: List[EffectSpace], bases: Sequence[SwingBaseline],
                 continue
             fixed = {**plain, key: rate if key == 'table_rads' else tilt}
             names = lead + tuple(f'{prefix}{n}' for n in orders)
-            basis = []
-            for i in idx:
-                # The linear blocks see the table's deterministic part only: probed on the
-                # true rate, where or not the table acts on the sensed value.
-                probe = {**{k: v for k, v in fixed.items() if k != 'on_output'},
-                         **dict.fromkeys(names, 0.0)}
-                runs = [simulate(i, [(name, {**probe, n: TABLE_UNIT})], 4242) for n in names]
-                basis.append({b: np.array([(o[b] - zero[i][b]) / TABLE_UNIT for o in runs])
-                              for b in TABLE_BLOCKS if b in zero[i]})
+            # The linear blocks see the table's deterministic part only: probed on the true
+            # rate, whether or not the table acts on the sensed value.
+            probe = {**{k: v for k, v in fixed.items() if k != 'on_output'},
+                     **dict.fromkeys(names, 0.0)}
             tables.append(EffectSpace(name, [], fixed={**fixed, **dict.fromkeys(names, 0.0)},
-                                      estimated=names,
-                                      linear=LinearTerms(names, TABLE_BLOCKS, tuple(basis))))
+                                      estimated=names, linear=LinearTerms(
+                                          names, TABLE_BLOCKS, basis(name, probe, names))))
         out.append(replace(sp, alternatives=tuple(sp.alternatives) + tuple(tables))
                    if tables else sp)
     return out
