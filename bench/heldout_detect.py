@@ -140,6 +140,13 @@ def stamp_z(stamp_psd, amp_rate: float, f0: float, n_arw: float, floor: float,
     return quadratic_z(s_r, f, n_arw, floor, duration)
 
 
+def period_lines(err, w: float, kmin: int = 1) -> float:
+    """Norm of lines kmin..60 of ``err(t)`` over one swing period (4096 points)."""
+    t = np.arange(4096) * (2 * np.pi / w) / 4096
+    c = np.fft.rfft(err(t)) / t.size
+    return float(2 * np.linalg.norm(c[kmin:61]))
+
+
 def swing_scales(period_s: float, duration: float):
     """
     Return the swing sets' yardsticks from the adis16405 preset: (N, amplitude, encoder, w, s).

@@ -91,7 +91,7 @@ contact on a 10 Ohm input); network delay sds of 4.45, 20 and 100 us; track over
 """
 from functools import lru_cache
 
-from heldout_detect import encoder_floor, matched_z, stamp_z, swing_scales
+from heldout_detect import encoder_floor, matched_z, period_lines, stamp_z, swing_scales
 import numpy as np
 from scipy import special
 from validate_diagnosis_swing_heldout_m import fitted_residual
@@ -306,13 +306,6 @@ def shapes(rate_hz: float) -> dict:
     }
 
 
-def lines(err, w: float, kmin: int = 1) -> float:
-    """Norm of lines kmin..60 of ``err(t)`` over one swing period (4096 points)."""
-    t = np.arange(4096) * (2 * np.pi / w) / 4096
-    c = np.fft.rfft(err(t)) / t.size
-    return float(2 * np.linalg.norm(c[kmin:61]))
-
-
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
@@ -322,10 +315,10 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
         def f(u):
             return G0 * np.sin(amp * np.sin(w * u))
         # creep starts CREEP_PRE before t: the period is settled (10 recovery times)
-        return float(lines(lambda t: p['gy'] * (f(t) + creep(t, f)), w) / s)
+        return float(period_lines(lambda t: p['gy'] * (f(t) + creep(t, f)), w) / s)
     if name == 'scale_factor_asymmetry':
         mean = p['a'] * np.exp(CONTACT_SIGMA ** 2 / 2)
-        z_mean = lines(lambda t: mean * np.maximum(-amp * w * np.cos(w * t), 0.0), w, 2) / s
+        z_mean = period_lines(lambda t: mean * np.maximum(-amp * w * np.cos(w * t), 0.0), w, 2) / s
         var = p['a'] ** 2 * np.exp(CONTACT_SIGMA ** 2) * np.expm1(CONTACT_SIGMA ** 2)
         seg = n_arw ** 2 / ((amp * w) ** 2 * period_s / 4)     # a half swing's gain variance
         z_scatter = var / seg * np.sqrt(duration / period_s / 2)

@@ -72,7 +72,8 @@ and 1.1 arcsec).
 """
 from functools import lru_cache
 
-from heldout_detect import encoder_floor, matched_z, noise_lines, stamp_z, swing_scales
+from heldout_detect import (encoder_floor, matched_z, noise_lines, period_lines, stamp_z,
+                            swing_scales)
 import numpy as np
 from scipy import special
 from validate_diagnosis_swing_heldout_m import fitted_residual
@@ -266,13 +267,6 @@ def shapes(rate_hz: float) -> dict:
     }
 
 
-def lines(err, w: float, kmin: int = 1) -> float:
-    """Norm of lines kmin..60 of ``err(t)`` over one swing period (4096 points)."""
-    t = np.arange(4096) * (2 * np.pi / w) / 4096
-    c = np.fft.rfft(err(t)) / t.size
-    return float(2 * np.linalg.norm(c[kmin:61]))
-
-
 def detectability(name: str, params: dict, period_s: float = 5.0, duration: float = 900.0,
                   rate_hz: float = 1000.0) -> float:
     """Analytic z of one level on one run (module docstring), preset adis16405 numbers."""
@@ -281,12 +275,14 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
     s_n = n_arw * np.sqrt(rate_hz)
     n = int(duration * rate_hz)
     if name == 'g_sensitivity':
-        return float(lines(lambda t: waviness(G0 * np.sin(amp * np.sin(w * t)), p['c']), w) / s)
+        def err(t):
+            return waviness(G0 * np.sin(amp * np.sin(w * t)), p['c'])
+        return float(period_lines(err, w) / s)
     if name == 'scale_factor_asymmetry':
         def err(t):
             tt = np.r_[t, t + 2 * np.pi / w]                    # a second period: t_r known
             return droop(tt, amp * w * np.cos(w * tt), p['a'])[t.size:]
-        return float(lines(err, w) / s)
+        return float(period_lines(err, w) / s)
     if name == 'scale_factor_nonlinearity':
         return float(noise_lines(lambda v: dac_error(v, p['sigma_u']), amp * w, s_n) / s)
     floor = encoder_floor(enc, rate_hz, amp * w)
