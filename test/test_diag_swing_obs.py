@@ -9,7 +9,7 @@ Records: the bench simulator's ADIS16405 swing (gyro 200 Hz, encoder 1 kHz, 60 s
 from gyro_char.diagnosis import (engine as diagnose, swing as diag_swing,
                                  swing_obs as diag_swing_obs)
 from gyro_char.diagnosis.fit import EffectSpace, Param
-from gyro_char.diagnosis.swing_spaces import line_start, with_lines
+from gyro_char.diagnosis.swing_spaces import harmonics_shown, line_start, with_lines
 from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
@@ -121,6 +121,12 @@ def test_harness_cyclic_error_peaks_at_1000_and_3000(clean):
     started = with_lines(sp, [o], [o0])
     assert started.start == {'lines': 1000.0}
     assert [p.name for p in started.params] == ['a1', 'lines']
+    # Of the harmonics 2-4 only the third stands as a line of its own; a uniform stamp
+    # jitter's broadband excess (every band from 512 lines up) shows none at its start's
+    # multiples.
+    assert harmonics_shown([o], [o0], 1000.0) == {3}
+    oj = _obs(imu, _harness_jitter(enc, 3e-4))
+    assert harmonics_shown([oj], [o0], line_start([oj], [o0])) == set()
     # No line in a clean record: whatever the start, no band stands out.
     assert np.all(np.abs(o0['encoder_lines'] - _obs(*_record(seed=12))['encoder_lines']) < 0.4)
 
@@ -151,10 +157,13 @@ def test_blind_harness_cyclic_error_found_with_its_line_count(clean):
     d = _diagnose(imu, _harness_cyclic(enc), 28)
     assert d.selected_effects[:1] == ['encoder_cyclic_error']
     assert d.steps[0]['params']['lines'] == pytest.approx(1000.0, rel=0.01)
-    # The harness's 3rd harmonic (3000 lines) is not in the catalogue's shape: part of the
-    # gap stays; the fitted first-harmonic amplitude is the truth's (5e-5 rad) within 2x.
-    assert 2.5e-5 < d.steps[0]['params']['a1'] < 1e-4
-    assert d.final_gap < 0.8 * d.baseline_gap
+    # The harness's 3rd harmonic (3000 lines) is the line's a3: both amplitudes the truth's
+    # (5e-5, 2e-5 rad) within 2x, the harmonics it lacks not searched, the gap nearly gone
+    # (with the first harmonic alone it kept a fifth: 114.5 -> 27.5 on a 15 min run).
+    p = d.steps[0]['params']
+    assert 2.5e-5 < p['a1'] < 1e-4 and 1e-5 < p['a3'] < 4e-5
+    assert 'a2' not in p and 'a4' not in p     # not shown as lines: not searched
+    assert d.final_gap < 0.1 * d.baseline_gap
 
 
 def test_blind_harness_jitter_found(clean):

@@ -416,3 +416,23 @@ def test_encoder_cyclic_error_locked_to_angle():
     assert math.hypot(c[0], c[1]) == pytest.approx(a1, rel=1e-6)
     assert math.atan2(c[1], c[0]) == pytest.approx(0.3, abs=1e-6)
     assert math.hypot(c[2], c[3]) == pytest.approx(a2, rel=1e-6)
+
+
+def test_encoder_cyclic_error_third_and_fourth_harmonics():
+    # The tracks' own distortion: lines at 3 L and 4 L with their phases; unset, absent
+    # from describe() (earlier truth.json unchanged).
+    cfg = _swing_cfg()
+    run = simulate_swing(cfg, duration=10.0, seed=15, channels=['gyro_x'],
+                         effects=['encoder_cyclic_error:lines=500,a1=0,a2=0,a3=3e-6,a4=2e-6,'
+                                  'p3=0.5,p4=-0.7'])
+    phi = stand_angle_clean(cfg.stand, run.encoder.t)
+    x = 500.0 * phi
+    design = np.column_stack([f(k * x) for k in (1, 2, 3, 4) for f in (np.sin, np.cos)])
+    c, *_ = np.linalg.lstsq(design, run.encoder.channels['encoder'] - phi, rcond=None)
+    assert np.allclose(c[:4], 0.0, atol=1e-12)
+    assert math.hypot(c[4], c[5]) == pytest.approx(3e-6, rel=1e-6)
+    assert math.atan2(c[5], c[4]) == pytest.approx(0.5, abs=1e-6)
+    assert math.hypot(c[6], c[7]) == pytest.approx(2e-6, rel=1e-6)
+    assert math.atan2(c[7], c[6]) == pytest.approx(-0.7, abs=1e-6)
+    plain = EFFECTS['encoder_cyclic_error']().describe()['params']
+    assert 'a3' not in plain and 'p4' not in plain

@@ -18,6 +18,7 @@ import numpy as np
 G0 = 9.80665
 MEMORY = (0.005, 1.0)     # scale-factor memory searched: from none, 0.5 % .. 1 period
 LOCK_IN = (3e-4, 0.3)     # lock-in rate searched: from none, fractions of the peak rate
+ECE_TOP = 300.0           # cyclic error amplitudes searched up to this many encoder sds
 
 
 def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
@@ -54,10 +55,15 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         EffectSpace('scale_factor_asymmetry', [
             Param('a', 0.03 * sig / rate, 300.0 * sig / rate), memory]),
         # Line count: started by ``signs`` at the record's line-spectrum peak (exact to a
-        # fraction of a line); its range is +-1 % around that start (a whole number).
-        EffectSpace('encoder_cyclic_error', [Param('a1', 0.1 * base.encoder_sigma + 1e-9,
-                                                   30.0 * base.encoder_sigma + 1e-7)],
-                    fixed={'a2': 0.0}),
+        # fraction of a line); its range is +-1 % around that start (a whole number). The
+        # harmonics 2-4 of that line after it, each from none (its band of ``encoder_lines``
+        # an octave or two up: a third harmonic, clipped tracks' bumps four a line). Up to
+        # 300 encoder noise sds (0.8 mrad on the preset, 3 % of a 256-line pitch; at 30 the
+        # development set's strong 0.2 mrad error sat on the bound).
+        EffectSpace('encoder_cyclic_error', [
+            Param('a1', 0.1 * base.encoder_sigma + 1e-9, ECE_TOP * base.encoder_sigma + 1e-7),
+            *(Param(f'a{k}', 0.1 * base.encoder_sigma + 1e-9,
+                    ECE_TOP * base.encoder_sigma + 1e-7, off_at='lo') for k in (2, 3, 4))]),
         # Both streams: an IMU stamp error alone leaves no first-order trace here (the gyro
         # angle and the encoder read at the same wrong stamp move together); an encoder
         # stamp error shows as residual angle noise rate x error. Down to 0.2 % of the
@@ -124,6 +130,7 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
 
 # Line-spectrum excess (log10 amplitude) above which a band is taken as a line, not noise.
 LINE_EXCESS = 0.3
+HARMONICS = {'a2': 2, 'a3': 3, 'a4': 4}   # the cyclic error's harmonic amplitudes
 
 
 def line_start(reals: Sequence[dict], base: Sequence[dict]) -> Optional[float]:
@@ -149,15 +156,44 @@ def line_start(reals: Sequence[dict], base: Sequence[dict]) -> Optional[float]:
     return best
 
 
+def harmonics_shown(reals: Sequence[dict], base: Sequence[dict], start: float) -> set:
+    """
+    Harmonics k = 2..4 of line ``start`` that a record shows as lines of their own.
+
+    A band of ``encoder_lines`` standing ``LINE_EXCESS`` above the twin with its peak within
+    1 % of k x start. Without this test the harmonics raised three more octave bands at will
+    and took a strong wandering stamp error's broadband excess (the development set's:
+    named a cyclic error, 151.5 -> 5.74).
+    """
+    shown = set()
+    for r, b in zip(reals, base):
+        peaks = getattr(r, 'line_peaks', None)
+        if peaks is None or len(peaks) == 0 or 'encoder_lines' not in r:
+            continue
+        ex = np.asarray(r['encoder_lines']) - np.asarray(b['encoder_lines'])
+        for k in (2, 3, 4):
+            near = np.abs(np.asarray(peaks) / (k * start) - 1.0) < 0.01
+            if np.any(near & (ex > LINE_EXCESS)):
+                shown.add(k)
+    return shown
+
+
 def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> EffectSpace:
-    """``sp`` with ``lines`` started at the record's line and searchable within +-1 %."""
+    """
+    ``sp`` with ``lines`` started at the record's line and searchable within +-1 %.
+
+    Its harmonics a2..a4 stay only where the record shows them (``harmonics_shown``); no
+    line found, none stay.
+    """
     start = line_start(reals, base)
+    shown = harmonics_shown(reals, base, start) if start is not None and start >= 1 else set()
+    params = [p for p in sp.params if p.name not in HARMONICS or HARMONICS[p.name] in shown]
     if start is None or start < 1:
-        return sp
+        return replace(sp, params=params)
     lines = Param('lines', max(1.0, np.floor(0.99 * start)), np.ceil(1.01 * start),
                   integer=True)
     fixed = {k: v for k, v in sp.fixed.items() if k != 'lines'}
-    return replace(sp, params=list(sp.params) + [lines], fixed=fixed,
+    return replace(sp, params=params + [lines], fixed=fixed,
                    start={**sp.start, 'lines': start})
 
 

@@ -181,19 +181,32 @@ class EncoderCyclicError(Effect):
     summary = 'encoder error locked to angle (sine-cosine interpolation error)'
     physics = ('A sine-cosine encoder with L lines per revolution interpolates within each '
                'signal period 2 pi / L; amplitude/offset/phase imbalance of the two tracks '
-               'gives errors at 1x and 2x the signal frequency: phi_read = phi + a1 sin(L phi '
-               '+ p1) + a2 sin(2 L phi + p2). On a swing the error is a chirp following the '
-               'rate (frequency L |phi_dot| / 2 pi).')
+               'gives errors at 1x and 2x the signal frequency, distortion of the tracks '
+               '(harmonics in the sine and cosine, clipped crests) at 3x and 4x: phi_read = '
+               'phi + sum_k a_k sin(k L phi + p_k), k = 1..4. On a swing the error is a chirp '
+               'following the rate (frequency k L |phi_dot| / 2 pi).')
     PARAMS = {'lines': (2048.0, '1/rev', 'signal periods per revolution L'),
               'a1': (5.0e-6, 'rad', 'first-harmonic amplitude'),
               'a2': (2.0e-6, 'rad', 'second-harmonic amplitude'),
               'p1': (0.0, 'rad', 'first-harmonic phase'),
-              'p2': (0.0, 'rad', 'second-harmonic phase')}
+              'p2': (0.0, 'rad', 'second-harmonic phase'),
+              'a3': (0.0, 'rad', 'third-harmonic amplitude'),
+              'a4': (0.0, 'rad', 'fourth-harmonic amplitude'),
+              'p3': (0.0, 'rad', 'third-harmonic phase'),
+              'p4': (0.0, 'rad', 'fourth-harmonic phase')}
 
     def check(self):
         if self.lines <= 0:
             raise InputError('encoder_cyclic_error: lines must be > 0')
 
+    def describe(self):
+        return describe_without(self, 'a3', 'a4', 'p3', 'p4')
+
     def encoder_angle(self, ctx, t, angle):
         x = self.lines * angle
-        return angle + self.a1 * np.sin(x + self.p1) + self.a2 * np.sin(2.0 * x + self.p2)
+        out = angle + self.a1 * np.sin(x + self.p1) + self.a2 * np.sin(2.0 * x + self.p2)
+        for k in (3, 4):
+            a = getattr(self, f'a{k}')
+            if a != 0.0:
+                out = out + a * np.sin(k * x + getattr(self, f'p{k}'))
+        return out
