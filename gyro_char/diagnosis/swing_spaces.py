@@ -133,6 +133,16 @@ LINE_EXCESS = 0.3
 HARMONICS = {'a2': 2, 'a3': 3, 'a4': 4}   # the cyclic error's harmonic amplitudes
 
 
+def line_bands(reals: Sequence[dict], base: Sequence[dict]):
+    """Per record with line peaks: (peak line counts, ``encoder_lines``, excess over the twin)."""
+    for r, b in zip(reals, base):
+        peaks = getattr(r, 'line_peaks', None)
+        if peaks is None or len(peaks) == 0 or 'encoder_lines' not in r:
+            continue
+        level = np.asarray(r['encoder_lines'])
+        yield np.asarray(peaks, dtype=float), level, level - np.asarray(b['encoder_lines'])
+
+
 def line_start(reals: Sequence[dict], base: Sequence[dict]) -> Optional[float]:
     """
     Line count of the record's encoder error: the strongest line that stands out of the twin.
@@ -144,13 +154,9 @@ def line_start(reals: Sequence[dict], base: Sequence[dict]) -> Optional[float]:
     to a whole number. None when the observables carry no peaks.
     """
     best, key = None, None
-    for r, b in zip(reals, base):
-        peaks = getattr(r, 'line_peaks', None)
-        if peaks is None or len(peaks) == 0 or 'encoder_lines' not in r:
-            continue
-        ex = np.asarray(r['encoder_lines']) - np.asarray(b['encoder_lines'])
+    for peaks, level, ex in line_bands(reals, base):
         for k in np.flatnonzero(np.isfinite(peaks)):
-            rank = (ex[k] > LINE_EXCESS, r['encoder_lines'][k] if ex[k] > LINE_EXCESS else ex[k])
+            rank = (ex[k] > LINE_EXCESS, level[k] if ex[k] > LINE_EXCESS else ex[k])
             if key is None or rank > key:
                 best, key = float(np.round(peaks[k])), rank
     return best
@@ -162,17 +168,13 @@ def harmonics_shown(reals: Sequence[dict], base: Sequence[dict], start: float) -
 
     A band of ``encoder_lines`` standing ``LINE_EXCESS`` above the twin with its peak within
     1 % of k x start. Without this test the harmonics raised three more octave bands at will
-    and took a strong wandering stamp error's broadband excess (the development set's:
-    named a cyclic error, 151.5 -> 5.74).
+    and took a strong stamp jitter's broadband excess (the development set's: named a
+    cyclic error, 151.5 -> 5.74).
     """
     shown = set()
-    for r, b in zip(reals, base):
-        peaks = getattr(r, 'line_peaks', None)
-        if peaks is None or len(peaks) == 0 or 'encoder_lines' not in r:
-            continue
-        ex = np.asarray(r['encoder_lines']) - np.asarray(b['encoder_lines'])
+    for peaks, _, ex in line_bands(reals, base):
         for k in (2, 3, 4):
-            near = np.abs(np.asarray(peaks) / (k * start) - 1.0) < 0.01
+            near = np.abs(peaks / (k * start) - 1.0) < 0.01
             if np.any(near & (ex > LINE_EXCESS)):
                 shown.add(k)
     return shown
