@@ -19,6 +19,7 @@ G0 = 9.80665
 MEMORY = (0.005, 1.0)     # scale-factor memory searched: from none, 0.5 % .. 1 period
 LOCK_IN = (3e-4, 0.3)     # lock-in rate searched: from none, fractions of the peak rate
 ECE_TOP = 300.0           # cyclic error amplitudes searched up to this many encoder sds
+HARMONICS = {f'a{k}': k for k in (2, 3, 4)}   # the cyclic error's harmonic amplitudes
 
 
 def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
@@ -31,6 +32,7 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
     # the same span of quadrature amplitudes, so neither is favoured by its grid.
     q = base.N / w * np.sqrt(2.0 / base.duration)
     memory = Param('tau_s', MEMORY[0] * base.period_s, MEMORY[1] * base.period_s, off_at='lo')
+    cyclic = (0.1 * base.encoder_sigma + 1e-9, ECE_TOP * base.encoder_sigma + 1e-7)
     return [
         # The gyro lag part of the delay (a one-pole filter inside the gyro): the motion
         # sees delay_s whatever the split, the lag alone colours the noise; searched over the
@@ -61,9 +63,7 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         # 300 encoder noise sds (0.8 mrad on the preset, 3 % of a 256-line pitch; at 30 the
         # development set's strong 0.2 mrad error sat on the bound).
         EffectSpace('encoder_cyclic_error', [
-            Param('a1', 0.1 * base.encoder_sigma + 1e-9, ECE_TOP * base.encoder_sigma + 1e-7),
-            *(Param(f'a{k}', 0.1 * base.encoder_sigma + 1e-9,
-                    ECE_TOP * base.encoder_sigma + 1e-7, off_at='lo') for k in (2, 3, 4))]),
+            Param('a1', *cyclic), *(Param(name, *cyclic, off_at='lo') for name in HARMONICS)]),
         # Both streams: an IMU stamp error alone leaves no first-order trace here (the gyro
         # angle and the encoder read at the same wrong stamp move together); an encoder
         # stamp error shows as residual angle noise rate x error. Down to 0.2 % of the
@@ -130,7 +130,6 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
 
 # Line-spectrum excess (log10 amplitude) above which a band is taken as a line, not noise.
 LINE_EXCESS = 0.3
-HARMONICS = {'a2': 2, 'a3': 3, 'a4': 4}   # the cyclic error's harmonic amplitudes
 
 
 def line_bands(reals: Sequence[dict], base: Sequence[dict]):
@@ -173,7 +172,7 @@ def harmonics_shown(reals: Sequence[dict], base: Sequence[dict], start: float) -
     """
     shown = set()
     for peaks, _, ex in line_bands(reals, base):
-        for k in (2, 3, 4):
+        for k in HARMONICS.values():
             near = np.abs(peaks / (k * start) - 1.0) < 0.01
             if np.any(near & (ex > LINE_EXCESS)):
                 shown.add(k)
@@ -188,9 +187,10 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
     line found, none stay.
     """
     start = line_start(reals, base)
-    shown = harmonics_shown(reals, base, start) if start is not None and start >= 1 else set()
+    found = start is not None and start >= 1
+    shown = harmonics_shown(reals, base, start) if found else set()
     params = [p for p in sp.params if p.name not in HARMONICS or HARMONICS[p.name] in shown]
-    if start is None or start < 1:
+    if not found:
         return replace(sp, params=params)
     lines = Param('lines', max(1.0, np.floor(0.99 * start)), np.ceil(1.01 * start),
                   integer=True)

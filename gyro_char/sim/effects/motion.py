@@ -204,8 +204,8 @@ class EncoderCyclicError(Effect):
 
     def encoder_angle(self, ctx, t, angle):
         x = self.lines * angle
-        out = angle + self.a1 * np.sin(x + self.p1) + self.a2 * np.sin(2.0 * x + self.p2)
-        for k in (3, 4):
+        out = angle
+        for k in (1, 2, 3, 4):
             a = getattr(self, f'a{k}')
             if a != 0.0:
                 out = out + a * np.sin(k * x + getattr(self, f'p{k}'))
