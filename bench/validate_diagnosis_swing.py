@@ -278,6 +278,9 @@ def main(argv=None) -> int:
                     default=None,
                     help=f'a held-out set instead of the shapes here: b (the flag alone) = '
                          f'bench/{HELD_OUT}.py, c = bench/{HELD_OUT}_c.py, and so on')
+    ap.add_argument('--only', nargs='+', default=None, metavar='NAME[/LEVEL]',
+                    help='only these shapes, or one level of a shape (time_delay/weak); no '
+                         'pairs, no clean records')
     args = ap.parse_args(argv)
     shape_set = (held_out_shapes(args.rate, args.held_out) if args.held_out
                  else shapes(args.rate))
@@ -289,6 +292,9 @@ def main(argv=None) -> int:
     rows, t0 = [], time.time()
     todo = cases(args.mode, args.quick, args.seeds, {} if args.clean_only else shape_set,
                  clean_extra=args.clean)
+    if args.only:
+        todo = [c for c in todo if len(c[1]) == 1 and ({c[1][0][0], '/'.join(
+            (c[1][0][0], level_name(c[1][0][1])))} & set(args.only))]
     for mode, truth, seed in todo:
         row = {'mode': mode, 'truth': [label(n) for n, _ in truth],
                'label': '+'.join(f'{n}/{level_name(lv)}' for n, lv in truth) or 'clean',

@@ -5,6 +5,7 @@ from gyro_char.errors import InputError
 from gyro_char.sim.chain import G0, stand_angle_clean, stand_motion
 from gyro_char.sim.config import BenchConfig, noiseless
 from gyro_char.sim.effects import build_effects, EFFECTS, parse_effect
+from gyro_char.sim.effects.motion import saturate
 from gyro_char.sim.effects.sensor import bartlett_kernel, InternalLowpass
 from gyro_char.sim.simulator import simulate_static, simulate_swing
 import numpy as np
@@ -354,6 +355,54 @@ def test_lock_in_rate_follows_the_adler_law_in_every_odd_line():
                               limit=200)[0] / np.pi
         assert c[k] == pytest.approx(want, rel=2e-3, abs=1e-4 * big_w)
     assert abs(c[5]) > 0.01 * big_w and abs(c[0]) < 1e-4 * big_w and abs(c[3]) < 1e-4 * big_w
+
+
+def _loop(v, limit, windup_s, dt):
+    """The saturating loop sample by sample (the recursion ``saturate`` solves in spans)."""
+    a = math.exp(-dt / windup_s) if windup_s > 0 else 0.0
+    out, debt = np.empty_like(v), 0.0
+    for k, x in enumerate(v):
+        out[k] = min(max(x + a * debt / dt, -limit), limit)
+        debt = a * debt + (x - out[k]) * dt
+    return out
+
+
+@pytest.mark.parametrize('windup_s', [0.0, 0.004, 0.5, 50.0])
+def test_saturating_loop_equals_its_recursion_sample_by_sample(windup_s):
+    dt = 1e-3
+    t = np.arange(30000) * dt
+    rng = np.random.default_rng(4)
+    v = 0.44 * np.cos(2 * np.pi * t / 2.5) + 0.02 * rng.standard_normal(t.size)
+    for limit in (0.2, 0.42, 0.6):
+        got = saturate(v, limit, windup_s, dt)
+        assert np.allclose(got, _loop(v, limit, windup_s, dt), rtol=0, atol=1e-12), limit
+        assert np.max(np.abs(got)) <= limit + 1e-15
+    assert np.array_equal(saturate(v, 1.0, windup_s, dt), v)        # never out of range
+
+
+def test_full_scale_limit_clips_the_output_and_a_wound_up_loop_keeps_the_angle():
+    # Noiseless 20 s swing, peak 0.44 rad/s: clipped at 0.35 the crests are flat; wound up
+    # (a debt kept 1e6 s) the output also stays at the limit past the crest until the angle
+    # has caught up, so over whole periods the angle is the plain run's.
+    cfg = _swing_cfg()
+    runs = [simulate_swing(cfg, duration=20.0, seed=3, channels=['gyro_x'], effects=fx)
+            for fx in ([], ['scale_factor_nonlinearity:k2=0,range_rads=0.35'],
+                       ['scale_factor_nonlinearity:k2=0,range_rads=0.35,windup_s=1e6'])]
+    plain, clip, wound = (r.imu.channels['gyro_x'] for r in runs)
+    assert np.max(plain) > 0.43 and np.max(np.abs(clip)) == pytest.approx(0.35, abs=1e-12)
+    assert np.array_equal(clip, np.clip(plain, -0.35, 0.35))
+    held = [np.sum(np.abs(x) >= 0.35 - 1e-12) for x in (clip, wound)]
+    assert held[1] > 1.3 * held[0]
+    # Over one half swing, zero crossing to zero crossing (out of debt at both): the clip
+    # loses angle, the wound-up loop none.
+    step = float(np.median(np.diff(runs[0].imu.t)))
+    quarter = int(round(cfg.stand.period_s / 4 / step))
+    half = slice(quarter, quarter + 2 * quarter)
+    angle = [np.sum(x[half]) for x in (plain, clip, wound)]
+    assert abs(angle[2] - angle[0]) < 1e-6 * abs(angle[0])
+    assert abs(angle[1] - angle[0]) > 1e-2 * abs(angle[0])
+    assert 'range_rads' not in EFFECTS['scale_factor_nonlinearity'](k3=0.1).describe()[
+        'params']
 
 
 def test_relaxing_asymmetry_shifts_the_second_harmonic_and_keeps_f_clean():

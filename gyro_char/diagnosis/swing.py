@@ -27,7 +27,8 @@ from gyro_char.diagnosis.swing_calibrate import (
     calibrate_encoder, calibrate_n, calibration_shifts, with_calibration_error)
 from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
 from gyro_char.diagnosis.swing_obs import layout, raw_parts, UNITS
-from gyro_char.diagnosis.swing_spaces import signs, swing_spaces, unresolved_pairs, with_tables
+from gyro_char.diagnosis.swing_spaces import (signs, swing_spaces, unresolved_pairs,
+                                              with_saturation, with_tables)
 from gyro_char.diagnosis.swing_twin import (
     record_observables, record_residuals, record_scale, simulate_twin, twin_config)
 from gyro_char.diagnosis.twins import twin_effects
@@ -145,6 +146,9 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     longest = max(bases, key=lambda b: b.duration)
     spaces = [s for s in swing_spaces(longest) if s.name in names]
     spaces = with_tables(signs(spaces, reals, simulate), bases, simulate)
+    crests = [float(np.nanmax(np.abs(imu.channels[ch] - b.bias)))
+              for (imu, _, _), b in zip(records, bases)]
+    spaces = with_saturation(spaces, crests, bases)
     units = dict(UNITS, scale_factor_shift='rad/s')
     baseline = bases[0].to_json()
     if len(bases) > 1:

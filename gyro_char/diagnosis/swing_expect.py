@@ -275,7 +275,12 @@ class EffectParts:
     def part(self, i: int, effects: list) -> List[dict]:
         """Return D's raw parts on record ``i``: the deterministic effects', then noises'."""
         det = [fx for fx in effects if fx['name'] not in NOISE_EFFECTS]
-        out = [self._single(i, det, False)] if det else []
+        # A full-scale limit acts on the noise too (it cuts what reaches past it, on one side
+        # only: E clip(w + n) is not clip(w), the whole effect of a limit just below the peak
+        # rate, and it smooths the clipped corners): its part is run with the twin's noise.
+        full = any(fx['params'].get('range_rads', 0) for fx in det)
+        out = ([self._single(i, det, False, span_s=NOISE_SPAN_S if full else 0.0, full=full)]
+               if det else [])
         out += [self._lag(i, float(fx['params']['lag_s'])) for fx in det
                 if fx['name'] == 'time_delay' and fx['params'].get('lag_s', 0)]
         out += [self._bend(i, fx) for fx in det if fx['params'].get('on_output', 0)]

@@ -18,6 +18,9 @@ import numpy as np
 G0 = 9.80665
 MEMORY = (0.005, 1.0)     # scale-factor memory searched: from none, 0.5 % .. 1 period
 LOCK_IN = (3e-4, 0.3)     # lock-in rate searched: from none, fractions of the peak rate
+RANGE = (0.2, 1.1)        # full-scale limit searched: fractions of the smallest, largest peak
+WINDUP = 10.0             # a saturation's debt remembered up to this many periods
+CREST_SIGMAS = 2.5        # a crest below the peak plus this many sample sds: a limit shown
 ECE_TOP = 300.0           # cyclic error amplitudes searched up to this many encoder sds
 HARMONICS = {f'a{k}': k for k in (2, 3, 4)}   # the cyclic error's harmonic amplitudes
 
@@ -197,6 +200,46 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
     fixed = {k: v for k, v in sp.fixed.items() if k != 'lines'}
     return replace(sp, params=params + [lines], fixed=fixed,
                    start={**sp.start, 'lines': start})
+
+
+def saturation_shown(crests: Sequence[float], bases: Sequence[SwingBaseline]) -> bool:
+    """
+    Return True if a record's largest rate sample stays below what its swing alone reaches.
+
+    ``crests``: each record's largest |gyro - bias|. Unlimited, the samples near the crest
+    reach the peak rate (with the scale-factor error) plus about 4 of the gyro's sample sds
+    (the largest of ~10^5 near the crest); a full-scale limit holds them at the limit, a
+    wound-up loop too (its noise owed with the rest), a limit on the true rate within a
+    read-out noise of it.
+    """
+    return any(c < (1.0 + b.scale_factor_error) * b.peak_rate
+               + CREST_SIGMAS * b.N / np.sqrt(b.dt) for c, b in zip(crests, bases))
+
+
+def with_saturation(spaces: List[EffectSpace], crests: Sequence[float],
+                    bases: Sequence[SwingBaseline]) -> List[EffectSpace]:
+    """
+    Give the scale-factor nonlinearity a full-scale limit where the records show one.
+
+    Two forms, searched from the records' lowest crest over a fifth of the smallest peak
+    rate to just beyond the largest: a plain clip of the output (noise included), and a loop
+    that owes what it could not follow and pays it back in range (its integrator winds up),
+    its memory searched down from ten periods (the angle kept whole) to none. A plain clip
+    at the right limit is worse than none where the loop winds up, so the loop's search
+    starts wound up. Not shown (``saturation_shown``), neither is searched.
+    """
+    if not saturation_shown(crests, bases):
+        return spaces
+    peaks = [b.peak_rate for b in bases]
+    lo, hi = RANGE[0] * min(peaks), RANGE[1] * max(peaks)
+    limit = Param('range_rads', lo, hi, off_at='hi', init=float(np.clip(min(crests), lo, hi)))
+    period = max(b.period_s for b in bases)
+    forms = (EffectSpace('scale_factor_nonlinearity', [limit], fixed={'k2': 0.0}),
+             EffectSpace('scale_factor_nonlinearity', [limit, Param(
+                 'windup_s', min(b.dt for b in bases), WINDUP * period, off_at='lo',
+                 init=WINDUP * period)], fixed={'k2': 0.0}))
+    return [replace(sp, alternatives=tuple(sp.alternatives) + forms)
+            if sp.name == 'scale_factor_nonlinearity' else sp for sp in spaces]
 
 
 def unresolved_pairs(bases: Sequence[SwingBaseline], rel: float = 0.1) -> frozenset:
