@@ -108,6 +108,31 @@ def test_a_strong_saturation_is_inside_the_cubic_term_range():
     assert diag.final_gap < diag.null_gap['final_model_q95']
 
 
+def _range_forms(problem):
+    sfn = [s for s in problem.spaces if s.name == 'scale_factor_nonlinearity'][0]
+    return [a for a in sfn.alternatives if 'range_rads' in {p.name for p in a.params}]
+
+
+def test_a_wound_up_limit_is_searched_where_the_crests_show_it_and_found():
+    # A loop limited at 0.40 rad/s (9 % under the peak rate) that pays back what it could not
+    # follow: the record's crest sits at the limit, the clean record's some four sample sds
+    # above the peak; only the first gets the two forms (started at its crest), and the
+    # wound-up one closes the gap that the cubic, the lock-in and the tables leave.
+    clean = diag_swing.swing_problem(*_record([], 45), 5.0)
+    assert _range_forms(clean) == []
+    fx = [('scale_factor_nonlinearity', {'k2': 0.0, 'range_rads': 0.40, 'windup_s': 1e6})]
+    problem = diag_swing.swing_problem(*_record(fx, 45), 5.0)
+    forms = _range_forms(problem)
+    assert len(forms) == 2 and [p.name for p in forms[1].params] == ['range_rads', 'windup_s']
+    assert forms[0].params[0].init == pytest.approx(0.40, abs=1e-3)   # one output step
+    assert forms[1].params[1].init == forms[1].params[1].hi      # the loop starts wound up
+    diag = diagnose.run(problem, repeats=6, seed=3)
+    assert diag.selected_effects[:1] == ['scale_factor_nonlinearity']
+    p = dict(diag.model)['scale_factor_nonlinearity']
+    assert p['range_rads'] == pytest.approx(0.40, rel=0.03) and p['windup_s'] > 5.0  # a period
+    assert diag.final_gap < 0.2 * diag.baseline_gap
+
+
 def test_clean_swing_record_raises_no_effect():
     diag = _diagnose([], seed=43)
     assert diag.selected_effects == []

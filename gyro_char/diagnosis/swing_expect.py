@@ -277,10 +277,13 @@ class EffectParts:
         det = [fx for fx in effects if fx['name'] not in NOISE_EFFECTS]
         # A full-scale limit acts on the noise too (it cuts what reaches past it, on one side
         # only: E clip(w + n) is not clip(w), the whole effect of a limit just below the peak
-        # rate, and it smooths the clipped corners): its part is run with the twin's noise.
-        full = any(fx['params'].get('range_rads', 0) for fx in det)
-        out = ([self._single(i, det, False, span_s=NOISE_SPAN_S if full else 0.0, full=full)]
-               if det else [])
+        # rate, and it smooths the clipped corners): its part is run with the twin's noise,
+        # apart from the others (a gyro lag would colour that noise twice: ``_lag``).
+        limits = [fx for fx in det if fx['params'].get('range_rads', 0)]
+        det = [fx for fx in det if fx not in limits]
+        out = [self._single(i, det, False)] if det else []
+        out += ([self._single(i, limits, False, span_s=NOISE_SPAN_S, full=True)]
+                if limits else [])
         out += [self._lag(i, float(fx['params']['lag_s'])) for fx in det
                 if fx['name'] == 'time_delay' and fx['params'].get('lag_s', 0)]
         out += [self._bend(i, fx) for fx in det if fx['params'].get('on_output', 0)]

@@ -206,7 +206,9 @@ def saturation_shown(crests: Sequence[float], bases: Sequence[SwingBaseline]) ->
     """
     Return True if a record's largest rate sample stays below what its swing alone reaches.
 
-    ``crests``: each record's largest |gyro - bias|. Unlimited, the samples near the crest
+    ``crests``: each record's lower crest, the smaller of max(gyro) - bias and bias -
+    min(gyro) (a limit on the output holds the side the bias points away from lower).
+    Unlimited, the samples near the crest
     reach the peak rate (with the scale-factor error) plus about 4 of the gyro's sample sds
     (the largest of ~10^5 near the crest); a full-scale limit holds them at the limit, a
     wound-up loop too (its noise owed with the rest), a limit on the true rate within a
@@ -232,7 +234,8 @@ def with_saturation(spaces: List[EffectSpace], crests: Sequence[float],
         return spaces
     peaks = [b.peak_rate for b in bases]
     lo, hi = RANGE[0] * min(peaks), RANGE[1] * max(peaks)
-    limit = Param('range_rads', lo, hi, off_at='hi', init=float(np.clip(min(crests), lo, hi)))
+    crest = min(c + abs(b.bias) for c, b in zip(crests, bases))     # the limit on the output
+    limit = Param('range_rads', lo, hi, off_at='hi', init=float(np.clip(crest, lo, hi)))
     period = max(b.period_s for b in bases)
     forms = (EffectSpace('scale_factor_nonlinearity', [limit], fixed={'k2': 0.0}),
              EffectSpace('scale_factor_nonlinearity', [limit, Param(
