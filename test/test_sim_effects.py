@@ -358,7 +358,7 @@ def test_lock_in_rate_follows_the_adler_law_in_every_odd_line():
 
 
 def _loop(v, limit, windup_s, dt):
-    """The saturating loop sample by sample (the recursion ``saturate`` solves in spans)."""
+    """Run the saturating loop sample by sample (the recursion ``saturate`` solves in spans)."""
     a = math.exp(-dt / windup_s) if windup_s > 0 else 0.0
     out, debt = np.empty_like(v), 0.0
     for k, x in enumerate(v):
