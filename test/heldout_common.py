@@ -9,6 +9,7 @@ import bench_script
 from gyro_char.allan.kernel import overlapping_avar
 from gyro_char.sim.config import BenchConfig
 import numpy as np
+import pytest
 from scipy import signal
 
 DT = 0.01
@@ -123,6 +124,55 @@ def check_swing_set(module, shapes):
             assert len(out) == 4 and all(a.shape == t.shape and np.all(np.isfinite(a))
                                          for a in out), name
             assert np.all(np.diff(out[2]) > 0) and np.all(np.diff(out[0]) > 0), name
+
+
+def swing_set_tests(module, off):
+    """
+    Return the checks every swing set with edges at z ~ 4 shares, as pytest test functions.
+
+    The set's names, levels and output (``check_swing_set``) and reproducible generators;
+    each edge at z = 4 +- 0.15 (``module.detectability``); each shape at its ``off[name]``
+    parameters returns the run unchanged.
+    """
+    shapes = module.shapes(1000.0)
+    edge = {}
+
+    def test_set_covers_the_catalogue_with_reproducible_generators():
+        check_swing_set(module, shapes)
+        for name, (fn, levels) in shapes.items():
+            a, b = (swing(fn, levels[0], 10.0)[2] for _ in range(2))
+            assert all(np.array_equal(u, v) for u, v in zip(a, b)), name
+
+    @pytest.mark.parametrize('name', SWING_NAMES)
+    def test_edge_is_at_z4(name):
+        if name not in edge:
+            edge[name] = module.detectability(name, shapes[name][1][2])
+        assert edge[name] == pytest.approx(4.0, abs=0.15), name
+
+    @pytest.mark.parametrize('name', SWING_NAMES)
+    def test_off_levels_leave_the_run_unchanged(name):
+        t, rate, out = swing(shapes[name][0], off[name], 10.0)
+        want = (t, rate, t, AMP * np.sin(W * t))
+        assert all(np.allclose(a, b, rtol=0, atol=1e-12) for a, b in zip(out, want)), name
+
+    return (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,
+            test_off_levels_leave_the_run_unchanged)
+
+
+def unit_stamp_errors(fn, sigma, seed0, runs=4):
+    """
+    Return a stamp-error shape's encoder stamp errors over ``sigma`` (runs x 2^17 samples).
+
+    Each run at 1 kHz, from seeds ``seed0``.., is checked to leave the IMU stamps and the
+    encoder angle alone and to keep the encoder stamps increasing.
+    """
+    t = np.arange(2 ** 17) * 1e-3
+    outs = [fn(t, t * 0, t.copy(), np.sin(W * t), None, rng(seed0 + i), sigma=sigma)
+            for i in range(runs)]
+    for out in outs:
+        assert np.array_equal(out[0], t) and np.array_equal(out[3], np.sin(W * t))
+        assert np.all(np.diff(out[2]) > 0)
+    return np.array([(out[2] - t) / sigma for out in outs])
 
 
 def check_harnesses(letter, shapes, swing_shapes, monkeypatch):

@@ -1,10 +1,9 @@
 # Held-out set AE (bench/validate_diagnosis_swing_heldout_ae.py, swing only): the generators do
 # what their docstring claims, the edges sit at z ~ 4, and the swing harness reaches the set by
 # --held-out ae. THE GENERATORS only, never the diagnosis.
-from functools import lru_cache
-
 import bench_script
-from heldout_common import AMP, check_swing_set, G0, rng, swing, SWING_NAMES, W
+from heldout_common import (AMP, G0, rng, swing, swing_set_tests, unit_stamp_errors,
+                            W)
 import numpy as np
 import pytest
 
@@ -16,29 +15,8 @@ OFF = {'time_delay': {'slew': np.inf}, 'g_sensitivity': {'gy': 0.0},
        'timestamp_jitter': {'sigma': 0.0}, 'encoder_cyclic_error': {'o': 0.0}}
 
 
-@lru_cache(maxsize=None)
-def edge_z(name):
-    return SWING.detectability(name, SHAPES[name][1][2])
-
-
-def test_swing_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    check_swing_set(SWING, SHAPES)
-    for name, (fn, levels) in SHAPES.items():
-        a = swing(fn, levels[0], 10.0)[2]
-        b = swing(fn, levels[0], 10.0)[2]
-        assert all(np.array_equal(u, v) for u, v in zip(a, b)), name          # reproducible
-
-
-@pytest.mark.parametrize('name', SWING_NAMES)
-def test_edge_is_at_z4(name):
-    assert edge_z(name) == pytest.approx(4.0, abs=0.15), name
-
-
-@pytest.mark.parametrize('name', SWING_NAMES)
-def test_off_levels_leave_the_run_unchanged(name):
-    t, rate, out = swing(SHAPES[name][0], OFF[name], 10.0)
-    want = (t, rate, t, AMP * np.sin(W * t))
-    assert all(np.allclose(a, b, rtol=0, atol=1e-12) for a, b in zip(out, want)), name
+(test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,
+ test_off_levels_leave_the_run_unchanged) = swing_set_tests(SWING, OFF)
 
 
 def test_spike_guard_limits_each_step_and_lags_by_its_noise_driven_delay():
@@ -166,13 +144,7 @@ def test_polarity_relay_reads_each_negative_half_low_by_its_own_contact():
 def test_network_stamps_are_long_range_dependent_fractional_gaussian_noise():
     fn, levels = SHAPES['timestamp_jitter']
     sigma = levels[1]['sigma']
-    t = np.arange(2 ** 17) * 1e-3
-    outs = [fn(t, t * 0, t.copy(), np.sin(W * t), None, rng(10 + i), sigma=sigma)
-            for i in range(4)]
-    for out in outs:
-        assert np.array_equal(out[0], t) and np.array_equal(out[3], np.sin(W * t))
-        assert np.all(np.diff(out[2]) > 0)
-    x = np.array([(out[2] - t) / sigma for out in outs])
+    x = unit_stamp_errors(fn, sigma, 10)
     assert np.mean(x * x) == pytest.approx(1.0, rel=0.05)
     for lag in (1, 10, 100):                                                # the known mean 0
         got = np.mean(x[:, :-lag] * x[:, lag:])

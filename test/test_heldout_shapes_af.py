@@ -2,12 +2,10 @@
 # what their docstring claims, the edges sit at z ~ 4, and the swing harness reaches the set by
 # --held-out af. THE GENERATORS only, never the diagnosis.
 """Generator tests of held-out swing set AF."""
-from functools import lru_cache
-
 import bench_script
 
-from heldout_common import AMP, G0, SWING_NAMES, W
-from heldout_common import check_swing_set, rng, swing
+from heldout_common import AMP, G0, W
+from heldout_common import rng, swing, swing_set_tests, unit_stamp_errors
 
 import numpy as np
 
@@ -33,33 +31,8 @@ def stand_of(period):
     return stand
 
 
-@lru_cache(maxsize=None)
-def edge_z(name):
-    """Return the analytic z of shape ``name``'s edge level."""
-    return SWING.detectability(name, SHAPES[name][1][2])
-
-
-def test_swing_set_covers_the_catalogue_edges_at_z4_levels_ordered_outputs_finite():
-    """Check the set's names, ordered levels, finite output and reproducible generators."""
-    check_swing_set(SWING, SHAPES)
-    for name, (fn, levels) in SHAPES.items():
-        a = swing(fn, levels[0], 10.0)[2]
-        b = swing(fn, levels[0], 10.0)[2]
-        assert all(np.array_equal(u, v) for u, v in zip(a, b)), name          # reproducible
-
-
-@pytest.mark.parametrize('name', SWING_NAMES)
-def test_edge_is_at_z4(name):
-    """Check that each edge level sits at z ~ 4."""
-    assert edge_z(name) == pytest.approx(4.0, abs=0.15), name
-
-
-@pytest.mark.parametrize('name', SWING_NAMES)
-def test_off_levels_leave_the_run_unchanged(name):
-    """Check that each shape's off level returns the run as it came."""
-    t, rate, out = swing(SHAPES[name][0], OFF[name], 10.0)
-    want = (t, rate, t, AMP * np.sin(W * t))
-    assert all(np.allclose(a, b, rtol=0, atol=1e-12) for a, b in zip(out, want)), name
+(test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,
+ test_off_levels_leave_the_run_unchanged) = swing_set_tests(SWING, OFF)
 
 
 def test_reanchored_stamps_are_late_by_random_piecewise_constant_latencies():
@@ -234,13 +207,7 @@ def test_ringing_servo_stamp_error_is_a_resonant_gaussian_process():
     """Check the stamp error's sd, ringing autocorrelation, spectrum and noise gain."""
     fn, levels = SHAPES['timestamp_jitter']
     sigma = levels[1]['sigma']
-    t = np.arange(2 ** 17) * 1e-3
-    outs = [fn(t, t * 0, t.copy(), np.sin(W * t), None, rng(20 + i), sigma=sigma)
-            for i in range(4)]
-    for out in outs:
-        assert np.array_equal(out[0], t) and np.array_equal(out[3], np.sin(W * t))
-        assert np.all(np.diff(out[2]) > 0)
-    x = np.array([(out[2] - t) / sigma for out in outs])
+    x = unit_stamp_errors(fn, sigma, 20)
     assert np.mean(x * x) == pytest.approx(1.0, rel=0.05)
     assert np.mean(x ** 4) / np.mean(x * x) ** 2 == pytest.approx(3.0, rel=0.05)   # Gaussian
     acf = [np.mean(x[:, :-k] * x[:, k:]) / np.mean(x * x) for k in (1, 20, 40)]
