@@ -133,6 +133,19 @@ def test_a_wound_up_limit_is_searched_where_the_crests_show_it_and_found():
     assert diag.final_gap < 0.2 * diag.baseline_gap
 
 
+def test_a_full_scale_clip_is_found_at_the_twins_equivalent_limit():
+    # Clipped at 0.42 rad/s, noise included: the gap is sharp in the limit (the baseline's
+    # scale factor, fitted on the clipped record, puts the twin's equivalent 1.4 % lower:
+    # 0.41 -> 72, 0.415 -> 2.1, 0.42 -> 3.9), which the crest's dense grid resolves; the
+    # cubic with a lock-in had reached 3.5 of 11.8.
+    fx = [('scale_factor_nonlinearity', {'k2': 0.0, 'range_rads': 0.42})]
+    diag = diagnose.run(diag_swing.swing_problem(*_record(fx, 45), 5.0), repeats=6, seed=3)
+    p = dict(diag.model)['scale_factor_nonlinearity']
+    assert diag.selected_effects[:1] == ['scale_factor_nonlinearity']
+    assert p.get('range_rads', 0.0) == pytest.approx(0.42, rel=0.03)
+    assert diag.final_gap < 0.25 * diag.baseline_gap
+
+
 def test_clean_swing_record_raises_no_effect():
     diag = _diagnose([], seed=43)
     assert diag.selected_effects == []

@@ -34,10 +34,10 @@ CASES = {
     'scale_factor_nonlinearity_sensed': ([('scale_factor_nonlinearity', {
         'k2': 0.0, 'table_rads': 0.5, 'c3': 0.01, 'c7': -0.004, 'on_output': 1.0})],
         'harmonic_high'),
-    # A full-scale limit below the peak rate (0.44 rad/s), plain and wound up (the debt paid
-    # back in range): the crests flattened, noise included.
+    # A full-scale limit below the peak rate (0.44 rad/s), offset (one side first) and wound
+    # up (the debt paid back in range): the crests flattened, noise included.
     'scale_factor_nonlinearity_clip': ([('scale_factor_nonlinearity', {
-        'k2': 0.0, 'range_rads': 0.4})], 'harmonic_3f'),
+        'k2': 0.0, 'range_rads': 0.4, 'range_low_rads': 0.38})], 'harmonic_3f'),
     'scale_factor_nonlinearity_windup': ([('scale_factor_nonlinearity', {
         'k2': 0.0, 'range_rads': 0.41, 'windup_s': 50.0})], 'quadrature'),
     'time_delay_speed': ([('time_delay', {'delay_s': 0.0, 'table_rads': 0.46, 'd2': 2e-3,

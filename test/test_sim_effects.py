@@ -357,12 +357,12 @@ def test_lock_in_rate_follows_the_adler_law_in_every_odd_line():
     assert abs(c[5]) > 0.01 * big_w and abs(c[0]) < 1e-4 * big_w and abs(c[3]) < 1e-4 * big_w
 
 
-def _loop(v, limit, windup_s, dt):
+def _loop(v, limits, windup_s, dt):
     """Run the saturating loop sample by sample (the recursion ``saturate`` solves in spans)."""
     a = math.exp(-dt / windup_s) if windup_s > 0 else 0.0
     out, debt = np.empty_like(v), 0.0
     for k, x in enumerate(v):
-        out[k] = min(max(x + a * debt / dt, -limit), limit)
+        out[k] = min(max(x + a * debt / dt, limits[0]), limits[1])
         debt = a * debt + (x - out[k]) * dt
     return out
 
@@ -373,11 +373,11 @@ def test_saturating_loop_equals_its_recursion_sample_by_sample(windup_s):
     t = np.arange(30000) * dt
     rng = np.random.default_rng(4)
     v = 0.44 * np.cos(2 * np.pi * t / 2.5) + 0.02 * rng.standard_normal(t.size)
-    for limit in (0.2, 0.42, 0.6):
-        got = saturate(v, limit, windup_s, dt)
-        assert np.allclose(got, _loop(v, limit, windup_s, dt), rtol=0, atol=1e-12), limit
-        assert np.max(np.abs(got)) <= limit + 1e-15
-    assert np.array_equal(saturate(v, 1.0, windup_s, dt), v)        # never out of range
+    for limits in ((-0.2, 0.2), (-0.42, 0.42), (-0.6, 0.6), (-0.45, 0.38)):
+        got = saturate(v, limits, windup_s, dt)
+        assert np.allclose(got, _loop(v, limits, windup_s, dt), rtol=0, atol=1e-12), limits
+        assert limits[0] - 1e-15 <= np.min(got) and np.max(got) <= limits[1] + 1e-15
+    assert np.array_equal(saturate(v, (-1.0, 1.0), windup_s, dt), v)   # never out of range
 
 
 def test_full_scale_limit_clips_the_output_and_a_wound_up_loop_keeps_the_angle():

@@ -55,6 +55,11 @@ class Param:
     # tangent, log tan(pi v / (2 nyquist)), where its response changes evenly (near Nyquist a
     # tenth of a hertz matters as much as an octave lower down).
     nyquist: float = 0.0
+    # Values of the coarse grid, given (default: ``grid`` points evenly over the range): a
+    # parameter whose gap is sharp near a data-driven start (a full-scale limit near the
+    # record's crest: 1 % of the limit moves the clipped depth by a quarter) is gridded
+    # densely there, and Brent refines between the best point's neighbours as usual.
+    points: tuple = ()
 
     def is_off(self, value: float) -> bool:
         """Return True if ``value`` is this parameter's "absent" value (``off_at``)."""
@@ -274,6 +279,8 @@ def fit_effect(objective: GapObjective, selected: Effects, space: EffectSpace, *
             elif p.integer:
                 whole = np.unique(np.round(np.geomspace(p.lo, p.hi, grid + 2)))
                 us = np.array([p.to_u(v) for v in whole])
+            elif p.points:
+                us = np.unique(np.clip([p.to_u(v) for v in p.points], lo_u, hi_u))
             else:
                 us = np.linspace(lo_u, hi_u, grid)
             # The current value is a candidate too: a step never ends worse than where it

@@ -146,8 +146,8 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     longest = max(bases, key=lambda b: b.duration)
     spaces = [s for s in swing_spaces(longest) if s.name in names]
     spaces = with_tables(signs(spaces, reals, simulate), bases, simulate)
-    crests = [min(float(np.nanmax(g)) - b.bias, b.bias - float(np.nanmin(g)))
-              for g, b in ((imu.channels[ch], b) for (imu, _, _), b in zip(records, bases))]
+    crests = [(float(np.nanmax(imu.channels[ch])), -float(np.nanmin(imu.channels[ch])))
+              for imu, _, _ in records]
     spaces = with_saturation(spaces, crests, bases)
     units = dict(UNITS, scale_factor_shift='rad/s')
     baseline = bases[0].to_json()

@@ -21,6 +21,11 @@ LOCK_IN = (3e-4, 0.3)     # lock-in rate searched: from none, fractions of the p
 RANGE = (0.2, 1.1)        # full-scale limit searched: fractions of the smallest, largest peak
 WINDUP = 10.0             # a saturation's debt remembered up to this many periods
 CREST_SIGMAS = 2.5        # a crest below the peak plus this many sample sds: a limit shown
+# A limit's grid, in the lower crest's units: dense just below it (a clip of the output,
+# noise included, sits at the crest; the baseline's scale factor, fitted on the clipped
+# record, moves the twin's equivalent a percent or two), sparse down to a quarter less (a
+# limit on the true rate, the read-out noise added after it: some 4 noise sds lower).
+CREST_GRID = (0.6, 0.75, 0.85, 0.92, 0.96, 0.98, 0.99, 1.0, 1.02)
 ECE_TOP = 300.0           # cyclic error amplitudes searched up to this many encoder sds
 HARMONICS = {f'a{k}': k for k in (2, 3, 4)}   # the cyclic error's harmonic amplitudes
 
@@ -202,43 +207,44 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
                    start={**sp.start, 'lines': start})
 
 
-def saturation_shown(crests: Sequence[float], bases: Sequence[SwingBaseline]) -> bool:
+def saturation_shown(crests: Sequence[tuple], bases: Sequence[SwingBaseline]) -> bool:
     """
-    Return True if a record's largest rate sample stays below what its swing alone reaches.
+    Return True if a record's output stays on one side below what its swing alone reaches.
 
-    ``crests``: each record's lower crest, the smaller of max(gyro) - bias and bias -
-    min(gyro) (a limit on the output holds the side the bias points away from lower).
-    Unlimited, the samples near the crest
-    reach the peak rate (with the scale-factor error) plus about 4 of the gyro's sample sds
-    (the largest of ~10^5 near the crest); a full-scale limit holds them at the limit, a
-    wound-up loop too (its noise owed with the rest), a limit on the true rate within a
-    read-out noise of it.
+    ``crests``: each record's (max(gyro), -min(gyro)), the output's two crests. Unlimited,
+    the samples near a crest reach the bias plus or minus the peak rate (with the
+    scale-factor error) plus about 4 of the gyro's sample sds (the largest of ~10^5 near the
+    crest); a full-scale limit holds them at the limit, a wound-up loop too (its noise owed
+    with the rest), a limit on the true rate within a read-out noise of it.
     """
-    return any(c < (1.0 + b.scale_factor_error) * b.peak_rate
-               + CREST_SIGMAS * b.N / np.sqrt(b.dt) for c, b in zip(crests, bases))
+    return any(min(up - b.bias, down + b.bias) < (1.0 + b.scale_factor_error) * b.peak_rate
+               + CREST_SIGMAS * b.N / np.sqrt(b.dt) for (up, down), b in zip(crests, bases))
 
 
-def with_saturation(spaces: List[EffectSpace], crests: Sequence[float],
+def with_saturation(spaces: List[EffectSpace], crests: Sequence[tuple],
                     bases: Sequence[SwingBaseline]) -> List[EffectSpace]:
     """
     Give the scale-factor nonlinearity a full-scale limit where the records show one.
 
-    Two forms, searched from the records' lowest crest over a fifth of the smallest peak
-    rate to just beyond the largest: a plain clip of the output (noise included), and a loop
-    that owes what it could not follow and pays it back in range (its integrator winds up),
-    its memory searched down from ten periods (the angle kept whole) to none. A plain clip
-    at the right limit is worse than none where the loop winds up, so the loop's search
-    starts wound up. Not shown (``saturation_shown``), neither is searched.
+    Two forms: a plain clip of the output (noise included), and a loop that owes what it
+    could not follow and pays it back in range (its integrator winds up), its memory
+    searched down from ten periods (the angle kept whole) to none. The limit (one, at
+    +-range) starts at the records' lowest crest and is gridded densely just below it
+    (``CREST_GRID``), then refined within a fifth of the smallest peak rate to just beyond
+    the largest. A plain clip at the right limit is worse than none where the loop winds up,
+    so the loop's search starts wound up. Not shown (``saturation_shown``), neither is
+    searched.
     """
     if not saturation_shown(crests, bases):
         return spaces
     peaks = [b.peak_rate for b in bases]
     lo, hi = RANGE[0] * min(peaks), RANGE[1] * max(peaks)
-    crest = min(c + abs(b.bias) for c, b in zip(crests, bases))     # the limit on the output
-    limit = Param('range_rads', lo, hi, off_at='hi', init=float(np.clip(crest, lo, hi)))
+    crest = float(np.clip(min(min(c) for c in crests), lo, hi))
+    limits = [Param('range_rads', lo, hi, off_at='hi', init=crest,
+                    points=tuple(crest * np.array(CREST_GRID)))]
     period = max(b.period_s for b in bases)
-    forms = (EffectSpace('scale_factor_nonlinearity', [limit], fixed={'k2': 0.0}),
-             EffectSpace('scale_factor_nonlinearity', [limit, Param(
+    forms = (EffectSpace('scale_factor_nonlinearity', limits, fixed={'k2': 0.0}),
+             EffectSpace('scale_factor_nonlinearity', limits + [Param(
                  'windup_s', min(b.dt for b in bases), WINDUP * period, off_at='lo',
                  init=WINDUP * period)], fixed={'k2': 0.0}))
     return [replace(sp, alternatives=tuple(sp.alternatives) + forms)

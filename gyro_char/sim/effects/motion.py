@@ -47,8 +47,9 @@ class ScaleFactorNonlinearity(Effect):
                'table_rads, c_n is the rate line at n f. on_output 1: the table bends the '
                'sensed value, noise included (the law of a read-out), not the true rate: its '
                'slope where the rate is scales the noise along the swing (first order in the '
-               'noise). range_rads > 0: the output saturates at +-range_rads, noise included '
-               '(a full-scale limit); windup_s > 0: the rate the output could not follow is '
+               'noise). range_rads > 0: the output saturates at +range_rads and at '
+               '-range_low_rads (0: -range_rads), noise included (a full-scale limit; an '
+               'offset converter clips one side first); windup_s > 0: the rate the output could not follow is '
                'owed and paid back once in range (a rebalance loop whose integrator winds '
                'up), the debt forgotten with time constant windup_s (``saturate``).')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
@@ -59,17 +60,20 @@ class ScaleFactorNonlinearity(Effect):
               'table_rads': (0.0, 'rad/s', 'range of the tabulated deviation (0: none)'),
               'on_output': (0.0, '1', '1: the table acts on the sensed value, noise included'),
               'range_rads': (0.0, 'rad/s', 'full-scale limit of the output (0: none)'),
+              'range_low_rads': (0.0, 'rad/s', 'negative-side limit (0: range_rads)'),
               'windup_s': (0.0, 's', 'memory of the rate owed while saturated (0: none)'),
               **table_params('c', ODD_ORDERS, 'rad/s', 'tabulated deviation')}
 
     def check(self):
-        if min(self.tau_s, self.lock_in, self.table_rads, self.range_rads, self.windup_s) < 0:
+        if min(self.tau_s, self.lock_in, self.table_rads, self.range_rads,
+               self.range_low_rads, self.windup_s) < 0:
             raise InputError('scale_factor_nonlinearity: tau_s, lock_in, table_rads, '
-                             'range_rads and windup_s must be >= 0')
+                             'range_rads, range_low_rads and windup_s must be >= 0')
 
     def describe(self):
         return describe_without(self, 'tau_s', 'lock_in', 'table_rads', 'on_output',
-                                'range_rads', 'windup_s', *(f'c{n}' for n in ODD_ORDERS))
+                                'range_rads', 'range_low_rads', 'windup_s',
+                                *(f'c{n}' for n in ODD_ORDERS))
 
     def sensor(self, ctx, gyro, accel):
         w = ctx.true_rate
@@ -82,27 +86,29 @@ class ScaleFactorNonlinearity(Effect):
         gyro = gyro + table(self, 'c', ODD_ORDERS, w, self.table_rads,
                             sensed=sensed if self.on_output else None)
         if self.range_rads > 0.0:
-            gyro = np.vstack([saturate(row, self.range_rads, self.windup_s, ctx.dt_internal)
-                              for row in gyro])
+            low = self.range_low_rads or self.range_rads
+            gyro = np.vstack([saturate(row, (-low, self.range_rads), self.windup_s,
+                                       ctx.dt_internal) for row in gyro])
         return gyro, accel
 
 
-def saturate(v: np.ndarray, limit: float, windup_s: float, dt: float) -> np.ndarray:
+def saturate(v: np.ndarray, limits: tuple, windup_s: float, dt: float) -> np.ndarray:
     """
-    Output of a loop that follows ``v`` within +-``limit`` and owes what it could not follow.
+    Output of a loop that follows ``v`` within ``limits`` (low, high) and owes what it could not.
 
-    u_k = clip(v_k + a D_(k-1) / dt, -limit, limit), D_k = a D_(k-1) + (v_k - u_k) dt, with
+    u_k = clip(v_k + a D_(k-1) / dt, low, high), D_k = a D_(k-1) + (v_k - u_k) dt, with
     a = exp(-dt / windup_s): in range and out of debt u = v; saturated, the debt grows and is
     paid back at the full range once v returns (``windup_s`` 0: a plain clip; long: the angle
     is kept whole, a dead-beat loop). Sample by sample only where a saturation ends; along
     the limit the debt is one ``lfilter`` run, ended where the loop comes back in range.
     """
-    out = np.clip(v, -limit, limit)
+    low, high = limits
+    out = np.clip(v, low, high)
     if windup_s <= 0.0 or not np.any(out != v):
         return out
     out = v.copy()
     a = float(np.exp(-dt / windup_s))
-    over = np.flatnonzero(np.abs(v) > limit)
+    over = np.flatnonzero((v > high) | (v < low))
     n, k, debt = v.size, 0, 0.0
     while k < n:
         if debt == 0.0:   # the next sample out of range starts a saturation
@@ -111,15 +117,15 @@ def saturate(v: np.ndarray, limit: float, windup_s: float, dt: float) -> np.ndar
                 break
             k = int(over[j])
         x = v[k] + a * debt / dt
-        if abs(x) <= limit:   # back in range: the rest of the debt is paid at once
+        if low <= x <= high:   # back in range: the rest of the debt is paid at once
             out[k], debt, k = x, 0.0, k + 1
             continue
-        side, span = (limit if x > 0 else -limit), 256
+        side, sgn, span = (high, 1.0, 256) if x > high else (low, -1.0, 256)
         while True:   # debt along the limit: D_j = a D_(j-1) + (v_j - side) dt
             seg = v[k:k + span]
             owed = signal.lfilter([1.0], [1.0, -a], (seg - side) * dt, zi=[a * debt])[0]
             prev = np.r_[debt, owed[:-1]]
-            past = np.flatnonzero((seg + a * prev / dt - side) * side <= 0.0)
+            past = np.flatnonzero((seg + a * prev / dt - side) * sgn <= 0.0)
             stop = int(past[0]) if past.size else seg.size
             out[k:k + stop] = side
             debt = float(prev[stop]) if past.size else float(owed[-1])
