@@ -124,7 +124,8 @@ def test_a_wound_up_limit_is_searched_where_the_crests_show_it_and_found():
     problem = diag_swing.swing_problem(*_record(fx, 45), 5.0)
     forms = _range_forms(problem)
     assert len(forms) == 2 and [p.name for p in forms[1].params] == ['range_rads', 'windup_s']
-    assert forms[0].params[0].init == pytest.approx(0.40, abs=1e-3)   # one output step
+    sf = problem.context[0].scale_factor_error          # the twin's equivalent of the crest
+    assert forms[0].params[0].init == pytest.approx(0.40 * (1 + sf), abs=1e-3)   # an lsb
     assert forms[1].params[1].init == forms[1].params[1].hi      # the loop starts wound up
     diag = diagnose.run(problem, repeats=6, seed=3)
     assert diag.selected_effects[:1] == ['scale_factor_nonlinearity']
@@ -136,7 +137,7 @@ def test_a_wound_up_limit_is_searched_where_the_crests_show_it_and_found():
 def test_a_full_scale_clip_is_found_at_the_twins_equivalent_limit():
     # Clipped at 0.42 rad/s, noise included: the gap is sharp in the limit (the baseline's
     # scale factor, fitted on the clipped record, puts the twin's equivalent 1.4 % lower:
-    # 0.41 -> 72, 0.415 -> 2.1, 0.42 -> 3.9), which the crest's dense grid resolves; the
+    # 0.41 -> 72, 0.415 -> 2.1, 0.42 -> 3.9), which the dense grid there resolves; the
     # cubic with a lock-in had reached 3.5 of 11.8.
     fx = [('scale_factor_nonlinearity', {'k2': 0.0, 'range_rads': 0.42})]
     diag = diagnose.run(diag_swing.swing_problem(*_record(fx, 45), 5.0), repeats=6, seed=3)
