@@ -49,9 +49,10 @@ class ScaleFactorNonlinearity(Effect):
                'slope where the rate is scales the noise along the swing (first order in the '
                'noise). range_rads > 0: the output saturates at +range_rads and at '
                '-range_low_rads (0: -range_rads), noise included (a full-scale limit; an '
-               'offset converter clips one side first); windup_s > 0: the rate the output could not follow is '
-               'owed and paid back once in range (a rebalance loop whose integrator winds '
-               'up), the debt forgotten with time constant windup_s (``saturate``).')
+               'offset converter clips one side first); windup_s > 0: the rate the output '
+               'could not follow is owed and paid back once in range (a rebalance loop whose '
+               'integrator winds up), the debt forgotten with time constant windup_s '
+               '(``saturate``).')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
               'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient'),
               'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient'),
