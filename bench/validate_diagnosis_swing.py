@@ -292,9 +292,9 @@ def main(argv=None) -> int:
     rows, t0 = [], time.time()
     todo = cases(args.mode, args.quick, args.seeds, {} if args.clean_only else shape_set,
                  clean_extra=args.clean)
-    if args.only:
-        todo = [c for c in todo if len(c[1]) == 1 and ({c[1][0][0], '/'.join(
-            (c[1][0][0], level_name(c[1][0][1])))} & set(args.only))]
+    if args.only:   # one-effect cases named by shape or by shape/level
+        todo = [(m, truth, s) for m, truth, s in todo if len(truth) == 1
+                and {truth[0][0], f'{truth[0][0]}/{level_name(truth[0][1])}'} & set(args.only)]
     for mode, truth, seed in todo:
         row = {'mode': mode, 'truth': [label(n) for n, _ in truth],
                'label': '+'.join(f'{n}/{level_name(lv)}' for n, lv in truth) or 'clean',

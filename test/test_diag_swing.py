@@ -116,8 +116,9 @@ def _range_forms(problem):
 def test_a_wound_up_limit_is_searched_where_the_crests_show_it_and_found():
     # A loop limited at 0.40 rad/s (9 % under the peak rate) that pays back what it could not
     # follow: the record's crest sits at the limit, the clean record's some four sample sds
-    # above the peak; only the first gets the two forms (started at its crest), and the
-    # wound-up one closes the gap that the cubic, the lock-in and the tables leave.
+    # above the peak; only the first gets the two forms (started at the twin's equivalent of
+    # its crest), and the wound-up one closes the gap that the cubic, the lock-in and the
+    # tables leave.
     clean = diag_swing.swing_problem(*_record([], 45), 5.0)
     assert _range_forms(clean) == []
     fx = [('scale_factor_nonlinearity', {'k2': 0.0, 'range_rads': 0.40, 'windup_s': 1e6})]

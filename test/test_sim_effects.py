@@ -383,7 +383,7 @@ def test_saturating_loop_equals_its_recursion_sample_by_sample(windup_s):
 def test_full_scale_limit_clips_the_output_and_a_wound_up_loop_keeps_the_angle():
     # Noiseless 20 s swing, peak 0.44 rad/s: clipped at 0.35 the crests are flat; wound up
     # (a debt kept 1e6 s) the output also stays at the limit past the crest until the angle
-    # has caught up, so over whole periods the angle is the plain run's.
+    # has caught up, so over a half swing the angle is the plain run's.
     cfg = _swing_cfg()
     runs = [simulate_swing(cfg, duration=20.0, seed=3, channels=['gyro_x'], effects=fx)
             for fx in ([], ['scale_factor_nonlinearity:k2=0,range_rads=0.35'],

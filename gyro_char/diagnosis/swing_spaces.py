@@ -21,10 +21,11 @@ LOCK_IN = (3e-4, 0.3)     # lock-in rate searched: from none, fractions of the p
 RANGE = (0.2, 1.1)        # full-scale limit searched: fractions of the smallest, largest peak
 WINDUP = 10.0             # a saturation's debt remembered up to this many periods
 CREST_SIGMAS = 2.5        # a crest below the peak plus this many sample sds: a limit shown
-# A limit's grid, in the lower crest's units: dense just below it (a clip of the output,
-# noise included, sits at the crest; the baseline's scale factor, fitted on the clipped
-# record, moves the twin's equivalent a percent or two), sparse down to a quarter less (a
-# limit on the true rate, the read-out noise added after it: some 4 noise sds lower).
+# A limit's grid, in units of its start (``with_saturation``): dense just below it (a
+# clip of the output, noise included, sits at the crest; the baseline's scale factor, fitted
+# on the clipped record, moves the twin's equivalent a percent or two), sparse down to a
+# quarter less (a limit on the true rate, the read-out noise added after it: some 4 noise
+# sds lower).
 CREST_GRID = (0.6, 0.75, 0.85, 0.92, 0.96, 0.98, 0.99, 1.0, 1.02)
 ECE_TOP = 300.0           # cyclic error amplitudes searched up to this many encoder sds
 HARMONICS = {f'a{k}': k for k in (2, 3, 4)}   # the cyclic error's harmonic amplitudes
@@ -231,10 +232,9 @@ def with_saturation(spaces: List[EffectSpace], crests: Sequence[tuple],
     searched down from ten periods (the angle kept whole) to none. The limit (one, at
     +-range) starts at the records' lowest crest times one plus the baseline's scale-factor
     error (the twin's equivalent) and is gridded densely just below it (``CREST_GRID``),
-    then refined within a fifth of the smallest peak rate to just beyond
-    the largest. A plain clip at the right limit is worse than none where the loop winds up,
-    so the loop's search starts wound up. Not shown (``saturation_shown``), neither is
-    searched.
+    then refined within a fifth of the smallest peak rate to just beyond the largest. A
+    plain clip at the right limit is worse than none where the loop winds up, so the loop's
+    search starts wound up. Not shown (``saturation_shown``), neither is searched.
     """
     if not saturation_shown(crests, bases):
         return spaces
@@ -245,13 +245,13 @@ def with_saturation(spaces: List[EffectSpace], crests: Sequence[tuple],
     # peak), and the twin's swing enters the limit that much smaller.
     crest = float(np.clip(min((1.0 + b.scale_factor_error) * min(c)
                               for c, b in zip(crests, bases)), lo, hi))
-    limits = [Param('range_rads', lo, hi, off_at='hi', init=crest,
-                    points=tuple(crest * np.array(CREST_GRID)))]
+    limit = Param('range_rads', lo, hi, off_at='hi', init=crest,
+                  points=tuple(crest * np.array(CREST_GRID)))
     period = max(b.period_s for b in bases)
-    forms = (EffectSpace('scale_factor_nonlinearity', limits, fixed={'k2': 0.0}),
-             EffectSpace('scale_factor_nonlinearity', limits + [Param(
-                 'windup_s', min(b.dt for b in bases), WINDUP * period, off_at='lo',
-                 init=WINDUP * period)], fixed={'k2': 0.0}))
+    windup = Param('windup_s', min(b.dt for b in bases), WINDUP * period, off_at='lo',
+                   init=WINDUP * period)
+    forms = (EffectSpace('scale_factor_nonlinearity', [limit], fixed={'k2': 0.0}),
+             EffectSpace('scale_factor_nonlinearity', [limit, windup], fixed={'k2': 0.0}))
     return [replace(sp, alternatives=tuple(sp.alternatives) + forms)
             if sp.name == 'scale_factor_nonlinearity' else sp for sp in spaces]
 

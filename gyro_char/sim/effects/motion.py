@@ -121,7 +121,8 @@ def saturate(v: np.ndarray, limits: tuple, windup_s: float, dt: float) -> np.nda
         if low <= x <= high:   # back in range: the rest of the debt is paid at once
             out[k], debt, k = x, 0.0, k + 1
             continue
-        side, sgn, span = (high, 1.0, 256) if x > high else (low, -1.0, 256)
+        side, sgn = (high, 1.0) if x > high else (low, -1.0)
+        span = 256
         while True:   # debt along the limit: D_j = a D_(j-1) + (v_j - side) dt
             seg = v[k:k + span]
             owed = signal.lfilter([1.0], [1.0, -a], (seg - side) * dt, zi=[a * debt])[0]
