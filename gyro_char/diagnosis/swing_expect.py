@@ -48,6 +48,7 @@ NOISE_EFFECTS = ('timestamp_jitter',)
 LINEAR = ('harm', 'scale')
 QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'acf', 'locked')
 NOISE_SPAN_S = 240.0    # span of the jitter's runs (at most the record)
+LIMIT_SPAN_S = np.inf  # a full-scale limit's noisy runs: the whole record (``_cut``)
 JITTER_GRID = 8         # stamp errors run, log-spaced from 0.2 % to 45 % of the intervals
 SMOOTH_GRID = (0.05, 20.0)  # a smooth stamp error's grid, in intervals (``_unit``)
 LAG_GRID = (0.05, 20.0, 16)     # gyro lags run: from, to (gyro sample intervals), count
@@ -172,11 +173,13 @@ class EffectParts:
         lo, hi, n = LAG_GRID
         return np.geomspace(lo * self.bases[i].dt, hi * self.bases[i].dt, n)
 
-    def _noise_alone(self, i: int, fx: list) -> dict:
-        # Raw parts of the gyro noise's residual alone under ``fx``: noisy minus clean run.
-        key = (i, 'unit noise ' + repr(fx))
+    def _noise_alone(self, i: int, fx: list, full: bool = False) -> dict:
+        # Raw parts of the gyro noise's residual alone under ``fx``: noisy minus clean run
+        # (``full``: every noise of the twin, the quantizations and the encoder's included).
+        key = (i, 'unit noise ' + repr(fx) + (' full' if full else ''))
         if key not in self.cache:
-            runs = [self._run(i, fx, NOISE_SPAN_S, noisy)[0] for noisy in (False, True)]
+            runs = [self._run(i, fx, NOISE_SPAN_S, False)[0],
+                    self._run(i, fx, NOISE_SPAN_S, True, full)[0]]
             self.cache[key] = self._difference(i, *runs)
         return self.cache[key]
 
@@ -272,18 +275,38 @@ class EffectParts:
             self.cache[key] = self._as_noise(i, part, NOISE_SPAN_S)
         return self.cache[key]
 
+    def _cut(self, i: int, limits: list) -> dict:
+        """
+        Return the share of the gyro noise's power a limit leaves, per quadratic element.
+
+        Where the output sits at the limit its noise is gone: the limit scales the noise's
+        power down. Its part, one realisation with the limit less the same without, can take
+        off more than a twin of another realisation holds (a band's largest line, weighted
+        by the fast passages the limit flattens: log10 of a negative power, z of 3 000 on a
+        15 minute run); a twin keeps at least this share (``combine``'s floor).
+        """
+        key = (i, 'unit cut ' + repr(limits))
+        if key not in self.cache:
+            cut, plain = self._noise_alone(i, limits, True), self._noise_alone(i, [], True)
+            share = {q: np.clip(cut[q] / np.maximum(plain[q], 1e-300), 0.0, 1.0)
+                     for q in ('mean2', 'locked', 'ms')}
+            self.cache[key] = {**share, 'line2': share['mean2']}
+        return self.cache[key]
+
     def part(self, i: int, effects: list) -> List[dict]:
         """Return D's raw parts on record ``i``: the deterministic effects', then noises'."""
         det = [fx for fx in effects if fx['name'] not in NOISE_EFFECTS]
         # A full-scale limit acts on the noise too (it cuts what reaches past it, on one side
         # only: E clip(w + n) is not clip(w), the whole effect of a limit just below the peak
-        # rate, and it smooths the clipped corners): its part is run with the twin's noise,
-        # apart from the others (a gyro lag would colour that noise twice: ``_lag``).
+        # rate, and it smooths the clipped corners): its part is run with the twin's noise
+        # over the whole record (the noise's share of a line peak falls with the length),
+        # apart from the others (a gyro lag would colour that noise twice: ``_lag``), and
+        # takes from a twin no more of its noise than the limit does (``_cut``).
         limits = [fx for fx in det if fx['params'].get('range_rads', 0)]
         det = [fx for fx in det if fx not in limits]
         out = [self._single(i, det, False)] if det else []
-        out += ([self._single(i, limits, False, span_s=NOISE_SPAN_S, full=True)]
-                if limits else [])
+        out += ([{**self._single(i, limits, False, span_s=LIMIT_SPAN_S, full=True),
+                  'floor': self._cut(i, limits)}] if limits else [])
         out += [self._lag(i, float(fx['params']['lag_s'])) for fx in det
                 if fx['name'] == 'time_delay' and fx['params'].get('lag_s', 0)]
         out += [self._bend(i, fx) for fx in det if fx['params'].get('on_output', 0)]
