@@ -2,7 +2,7 @@
 import json
 
 from gyro_char.cli import main
-from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing
+from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing, swing_expect
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 import numpy as np
@@ -144,3 +144,23 @@ def test_a_deep_clip_on_a_record_longer_than_the_noise_span_matches_the_twins():
         se = np.sqrt((pseudo.std[b] ** 2 + twins.std[b] ** 2) / k)
         z = (pseudo.mean[b] - twins.mean[b]) / np.maximum(se, 1e-12)
         assert np.sqrt(np.mean(z * z)) < TOLERANCE, (b, z)
+
+
+def test_a_limit_restores_the_noise_the_record_lost_at_it():
+    # The baseline's N is pinned on the clipped record, where the output held at the limit
+    # carries no noise; a twin applying the limit starts from N² over the share of time it
+    # is free. For a clip, that share is the time the swing's rate stays inside the limits;
+    # a loop that winds up holds the limit longer, past each crest.
+    cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': 200.0}})
+    clean = simulator.simulate_swing(swing_expect.clean_config(cfg), seed=0, duration=60.0,
+                                     channels=('gyro_x',)).imu.channels['gyro_x']
+    peak, bias = (clean.max() - clean.min()) / 2, (clean.max() + clean.min()) / 2
+    limit = 0.37
+    held = (np.arccos((limit - bias) / peak) + np.arccos((limit + bias) / peak)) / np.pi
+    clip = [{'name': 'scale_factor_nonlinearity', 'params': {'k2': 0.0, 'range_rads': limit}}]
+    gain = swing_expect.limit_gain(cfg, clip, 'x', 60.0)
+    assert 0.2 < held < 0.5
+    assert gain == pytest.approx(1.0 / (1.0 - held), rel=0.01)
+    wound = [{'name': 'scale_factor_nonlinearity', 'params': {
+        'k2': 0.0, 'range_rads': limit, 'windup_s': 50.0}}]
+    assert swing_expect.limit_gain(cfg, wound, 'x', 60.0) > 1.05 * gain

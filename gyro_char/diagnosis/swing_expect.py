@@ -91,6 +91,26 @@ def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
     return float(1.0 / np.median(h2))
 
 
+def limit_gain(cfg: BenchConfig, limits: list, axis: str, duration: float) -> float:
+    """
+    Return the gyro noise power a limit candidate's twin restores: 1 / the time it is free.
+
+    Where the output sits at its limit its noise is gone, so the baseline's N, pinned on the
+    clipped record's residual PSD, is the sensor's times the root of the share of time the
+    output moves; a twin that applies the limit must start from N² over that share, or it
+    cuts the noise twice (measured: 13 % of the time at the limit on held-out set I's
+    strong clip). The share from a noise-free run of ``limits`` over ``duration``.
+    """
+    run = simulator.simulate_swing(clean_config(cfg), seed=0, duration=duration,
+                                   effects=limits, channels=(f'gyro_{axis}',))
+    x = run.imu.channels[f'gyro_{axis}']
+    p = limits[0]['params']
+    hi = float(p['range_rads'])
+    lo = float(p.get('range_low_rads', 0.0)) or hi
+    held = (x >= hi * (1 - 1e-9)) | (x <= -lo * (1 - 1e-9))
+    return float(1.0 / max(1.0 - held.mean(), 0.1))
+
+
 def span(base: SwingBaseline) -> float:
     """Duration of the noise-free effect runs: whole periods, >= ``SPAN_S`` and 8 periods."""
     k = int(np.ceil(max(SPAN_S, 8.0 * base.period_s) / base.period_s))
@@ -113,10 +133,11 @@ class EffectParts:
         self.clean: Dict[int, tuple] = {}
 
     def _run(self, i: int, effects: list, span_s: float = 0.0, noisy: bool = False,
-             full: bool = False):
+             full: bool = False, gain: float = 1.0):
         b = self.bases[i]
         cfg = (self.config(b) if full else
                (noise_config if noisy else clean_config)(self.config(b)))
+        cfg.noise[f'gyro_{b.axis}']['N'] *= np.sqrt(gain)
         run = simulator.simulate_swing(cfg, seed=0,
                                        duration=min(span_s, b.duration) or span(b),
                                        effects=effects, channels=(f'gyro_{b.axis}',))
@@ -125,17 +146,18 @@ class EffectParts:
         return res, self.scale(run.imu, run.encoder, b.axis)
 
     def _single(self, i: int, effects: list, noise: bool, span_s: float = 0.0,
-                full: bool = False) -> dict:
+                full: bool = False, gain: float = 1.0) -> dict:
         # ``full``: both runs with the twin's noise (one realisation, common to both), so
-        # that the part keeps the effect's interaction with that noise.
-        key = (i, repr(effects) + f' {span_s}' + (' full' if full else ''))
+        # that the part keeps the effect's interaction with that noise; ``gain``: the run
+        # with the effect at that much more gyro noise power (``limit_gain``).
+        key = (i, repr(effects) + f' {span_s} {gain}' + (' full' if full else ''))
         if key not in self.cache:
             if len(self.cache) > 4096:
                 self.cache = {k: v for k, v in self.cache.items() if 'unit' in k[1]}
             if (i, span_s, full) not in self.clean:
                 self.clean[(i, span_s, full)] = self._run(i, [], span_s, full=full)
             res0, s0 = self.clean[(i, span_s, full)]
-            res, s = self._run(i, effects, span_s, full=full)
+            res, s = self._run(i, effects, span_s, full=full, gain=gain)
             part = self._difference(i, res0, res, cross=full or not noise)
             part['scale'] = s - s0
             if noise:
@@ -173,13 +195,14 @@ class EffectParts:
         lo, hi, n = LAG_GRID
         return np.geomspace(lo * self.bases[i].dt, hi * self.bases[i].dt, n)
 
-    def _noise_alone(self, i: int, fx: list, full: bool = False) -> dict:
+    def _noise_alone(self, i: int, fx: list, full: bool = False, gain: float = 1.0) -> dict:
         # Raw parts of the gyro noise's residual alone under ``fx``: noisy minus clean run
-        # (``full``: every noise of the twin, the quantizations and the encoder's included).
-        key = (i, 'unit noise ' + repr(fx) + (' full' if full else ''))
+        # (``full``: every noise of the twin, the quantizations and the encoder's included;
+        # ``gain``: the gyro noise's power that much higher).
+        key = (i, f'unit noise {fx!r} {gain}' + (' full' if full else ''))
         if key not in self.cache:
             runs = [self._run(i, fx, NOISE_SPAN_S, False)[0],
-                    self._run(i, fx, NOISE_SPAN_S, True, full)[0]]
+                    self._run(i, fx, NOISE_SPAN_S, True, full, gain)[0]]
             self.cache[key] = self._difference(i, *runs)
         return self.cache[key]
 
@@ -275,21 +298,32 @@ class EffectParts:
             self.cache[key] = self._as_noise(i, part, NOISE_SPAN_S)
         return self.cache[key]
 
+    def _limit_gain(self, i: int, limits: list) -> float:
+        key = (i, 'unit gain ' + repr(limits))
+        if key not in self.cache:
+            b = self.bases[i]
+            self.cache[key] = limit_gain(self.config(b), limits, b.axis, span(b))
+        return self.cache[key]
+
     def _cut(self, i: int, limits: list) -> dict:
         """
         Return the share of the gyro noise's power a limit leaves, per quadratic element.
 
         Where the output sits at the limit its noise is gone: the limit scales the noise's
-        power down. Its part, one realisation with the limit less the same without, can take
-        off more than a twin of another realisation holds (a band's largest line, weighted
-        by the fast passages the limit flattens: log10 of a negative power, z of 3 000 on a
-        15 minute run); a twin keeps at least this share (``combine``'s floor).
+        power down (the twin's noise first restored by ``limit_gain``). Its part, one
+        realisation with the limit less the same without, can take off more than a twin of
+        another realisation holds (a band's largest line, weighted by the fast passages the
+        limit flattens: log10 of a negative power, z of 3 000 on a 15 minute run); a twin
+        keeps at least this share of its band means and rate-bin mean squares (``combine``'s
+        floor), at most the gain (the phase-locked power is left out: the noise-alone runs
+        carry there the limit's own change with the noise, E clip(w + n) - clip(w)).
         """
         key = (i, 'unit cut ' + repr(limits))
         if key not in self.cache:
-            cut, plain = self._noise_alone(i, limits, True), self._noise_alone(i, [], True)
-            share = {q: np.clip(cut[q] / np.maximum(plain[q], 1e-300), 0.0, 1.0)
-                     for q in ('mean2', 'locked', 'ms')}
+            gain = self._limit_gain(i, limits)
+            cut, plain = self._noise_alone(i, limits, True, gain), self._noise_alone(i, [], True)
+            share = {q: np.clip(cut[q] / np.maximum(plain[q], 1e-300), 0.0, gain)
+                     for q in ('mean2', 'ms')}
             self.cache[key] = {**share, 'line2': share['mean2']}
         return self.cache[key]
 
@@ -305,8 +339,10 @@ class EffectParts:
         limits = [fx for fx in det if fx['params'].get('range_rads', 0)]
         det = [fx for fx in det if fx not in limits]
         out = [self._single(i, det, False)] if det else []
-        out += ([{**self._single(i, limits, False, span_s=LIMIT_SPAN_S, full=True),
-                  'floor': self._cut(i, limits)}] if limits else [])
+        if limits:
+            gain = self._limit_gain(i, limits)
+            out.append({**self._single(i, limits, False, span_s=LIMIT_SPAN_S, full=True,
+                                       gain=gain), 'floor': self._cut(i, limits)})
         out += [self._lag(i, float(fx['params']['lag_s'])) for fx in det
                 if fx['name'] == 'time_delay' and fx['params'].get('lag_s', 0)]
         out += [self._bend(i, fx) for fx in det if fx['params'].get('on_output', 0)]

@@ -8,7 +8,7 @@ streams and observables of ``swing_obs``) and ``record_scale`` (its least-square
 from typing import Sequence
 
 from gyro_char.diagnosis.swing_baseline import PRESET, SwingBaseline
-from gyro_char.diagnosis.swing_expect import lag_gain
+from gyro_char.diagnosis.swing_expect import lag_gain, limit_gain, span
 from gyro_char.diagnosis.swing_obs import residuals, solve_columns, swing_observables
 from gyro_char.diagnosis.twins import twin_effects
 from gyro_char.records import ENCODER_CHANNEL, Recording
@@ -45,7 +45,8 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
     A stamp delay candidate starts the gyro's instants that much earlier, so that its stamps
     fall where the record's do (``stamp_offset`` measured them delay included); a gyro lag
     (``lag_s``) leaves the stamps alone and restores the noise the N calibration took for
-    the lag's (``swing_expect.lag_gain``).
+    the lag's (``swing_expect.lag_gain``); a full-scale limit restores the noise the record
+    lost at the limit (``swing_expect.limit_gain``).
     """
     cfg = twin_config(base)
     ch = f'gyro_{base.axis}'
@@ -53,6 +54,10 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
         if n == 'time_delay':
             cfg.noise[ch]['N'] *= np.sqrt(lag_gain(float(p.get('lag_s', 0.0)), base.dt,
                                                    base.period_s))
+    limits = [fx for fx in twin_effects(effects) if fx['params'].get('range_rads', 0)]
+    if limits:
+        cfg.noise[ch]['N'] *= np.sqrt(limit_gain(twin_config(base), limits, base.axis,
+                                                 span(base)))
     cfg.gyro.start_s -= sum(float(p.get('delay_s', 0.0)) - float(p.get('lag_s', 0.0))
                             for n, p in effects if n == 'time_delay')
     run = simulator.simulate_swing(cfg, duration=base.duration,
