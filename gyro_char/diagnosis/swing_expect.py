@@ -91,6 +91,11 @@ def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
     return float(1.0 / np.median(h2))
 
 
+def limits_of(effects: Sequence[dict]) -> List[dict]:
+    """Return the effects (simulator specs) that hold a full-scale limit (``range_rads``)."""
+    return [fx for fx in effects if fx['params'].get('range_rads', 0)]
+
+
 def limit_gain(cfg: BenchConfig, limits: list, axis: str, duration: float) -> float:
     """
     Return the gyro noise power a limit candidate's twin restores: 1 / the time it is free.
@@ -336,7 +341,7 @@ class EffectParts:
         # over the whole record (the noise's share of a line peak falls with the length),
         # apart from the others (a gyro lag would colour that noise twice: ``_lag``), and
         # takes from a twin no more of its noise than the limit does (``_cut``).
-        limits = [fx for fx in det if fx['params'].get('range_rads', 0)]
+        limits = limits_of(det)
         det = [fx for fx in det if fx not in limits]
         out = [self._single(i, det, False)] if det else []
         if limits:

@@ -8,7 +8,7 @@ streams and observables of ``swing_obs``) and ``record_scale`` (its least-square
 from typing import Sequence
 
 from gyro_char.diagnosis.swing_baseline import PRESET, SwingBaseline
-from gyro_char.diagnosis.swing_expect import lag_gain, limit_gain, span
+from gyro_char.diagnosis.swing_expect import lag_gain, limit_gain, limits_of, span
 from gyro_char.diagnosis.swing_obs import residuals, solve_columns, swing_observables
 from gyro_char.diagnosis.twins import twin_effects
 from gyro_char.records import ENCODER_CHANNEL, Recording
@@ -54,10 +54,10 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
         if n == 'time_delay':
             cfg.noise[ch]['N'] *= np.sqrt(lag_gain(float(p.get('lag_s', 0.0)), base.dt,
                                                    base.period_s))
-    limits = [fx for fx in twin_effects(effects) if fx['params'].get('range_rads', 0)]
+    limits = limits_of(twin_effects(effects))
     if limits:
-        cfg.noise[ch]['N'] *= np.sqrt(limit_gain(twin_config(base), limits, base.axis,
-                                                 span(base)))
+        # The share is read off a noise-free run of this config (its noise set to zero).
+        cfg.noise[ch]['N'] *= np.sqrt(limit_gain(cfg, limits, base.axis, span(base)))
     cfg.gyro.start_s -= sum(float(p.get('delay_s', 0.0)) - float(p.get('lag_s', 0.0))
                             for n, p in effects if n == 'time_delay')
     run = simulator.simulate_swing(cfg, duration=base.duration,
