@@ -267,3 +267,15 @@ def test_a_parameter_sign_comes_from_the_part_of_the_response_that_changes_sign(
     assert signs([space], [real], simulate)[0].params[0].sign == -1.0
     real['harmonic_3f'] *= -1.0
     assert signs([space], [real], simulate)[0].params[0].sign == 1.0
+
+
+def test_a_resonant_stamp_error_is_named_with_its_band():
+    # An encoder clock disciplined by an underdamped servo: stamp errors of 60 us sd peaked at
+    # 25 Hz (q 3). Before the resonant form the run was named a white jitter left at 3.73 (and
+    # on other seeds a cyclic error, or nothing); the band's start comes from the residual PSD.
+    diag = _diagnose([('timestamp_jitter', {'sigma_s': 6e-5, 'stream': 1.0, 'freq_hz': 25.0,
+                                            'q': 3.0})], seed=7)
+    assert diag.selected_effects[:1] == ['timestamp_jitter']
+    params = diag.steps[0]['params']
+    assert 15.0 < params.get('freq_hz', 0.0) < 35.0
+    assert diag.final_gap < diag.null_gap['q95'] < diag.baseline_gap

@@ -29,6 +29,11 @@ CASES = {
     'timestamp_jitter_smooth': ([('timestamp_jitter', {'sigma_s': 3e-3, 'stream': 2.0,
                                                        'tau_s': 2.0, 'order': 2.0})],
                                 'increment_acf'),
+    # A resonant stamp error (an underdamped clock servo's jitter peaking, 25 Hz, q 3): rate x
+    # error is residual noise in that band.
+    'timestamp_jitter_resonant': ([('timestamp_jitter', {'sigma_s': 1e-4, 'stream': 2.0,
+                                                         'freq_hz': 25.0, 'q': 3.0})],
+                                  'residual_psd'),
     # Tabulated forms: a read-out law on the sensed value (it bends the noise: rate_locked and
     # the PSD see the slope) and a latency that grows with the speed.
     'scale_factor_nonlinearity_sensed': ([('scale_factor_nonlinearity', {

@@ -28,7 +28,7 @@ from gyro_char.diagnosis.swing_calibrate import (
 from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
 from gyro_char.diagnosis.swing_obs import layout, raw_parts, UNITS
 from gyro_char.diagnosis.swing_spaces import (signs, swing_spaces, unresolved_pairs,
-                                              with_saturation, with_tables)
+                                              with_saturation, with_stamp_band, with_tables)
 from gyro_char.diagnosis.swing_twin import (
     record_observables, record_residuals, record_scale, simulate_twin, twin_config)
 from gyro_char.diagnosis.twins import twin_effects
@@ -146,6 +146,7 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     longest = max(bases, key=lambda b: b.duration)
     spaces = [s for s in swing_spaces(longest) if s.name in names]
     spaces = with_tables(signs(spaces, reals, simulate), bases, simulate)
+    spaces = with_stamp_band(spaces, reals, ranges, simulate, bases)
     crests = [(float(np.nanmax(imu.channels[ch])), -float(np.nanmin(imu.channels[ch])))
               for imu, _, _ in records]
     spaces = with_saturation(spaces, crests, bases)

@@ -252,20 +252,18 @@ class EffectParts:
                                 JITTER_GRID)
         return np.geomspace(0.002 * min(dts), JITTER_CLIP * max(dts), JITTER_GRID)
 
-    def _unit(self, i: int, stream: float, k: int, tau: float = 0.0,
-              order: float = 1.0) -> dict:
-        # The jitter at grid point k over NOISE_SPAN_S, per unit stamp variance. A smooth
-        # error (order 2) is run with the twin's noise: it moves the gyro stamps' phase in
-        # the encoder interval by whole intervals, and with it how the interpolation passes
-        # the encoder's noise on (the residual's increment correlation), which a noise-free
-        # run cannot show.
-        sigma = float(self._grid(i, stream, order)[k])
-        extra = {'tau_s': tau} if tau else {}
-        if order == 2.0:
-            extra['order'] = 2.0
+    def _unit(self, i: int, stream: float, k: int, shape: dict) -> dict:
+        # The jitter at grid point k over NOISE_SPAN_S, per unit stamp variance; ``shape``:
+        # its correlation (tau_s and order, or a resonance's freq_hz and q). A smooth error
+        # (order 2) is run with the twin's noise: it moves the gyro stamps' phase in the
+        # encoder interval by whole intervals, and with it how the interpolation passes the
+        # encoder's noise on (the residual's increment correlation), which a noise-free run
+        # cannot show.
+        smooth = shape.get('order') == 2.0
+        sigma = float(self._grid(i, stream, 2.0 if smooth else 1.0)[k])
         part = self._single(i, [{'name': 'timestamp_jitter', 'params': {
-            'sigma_s': sigma, 'stream': stream, **extra}}], True, span_s=NOISE_SPAN_S,
-            full=order == 2.0)
+            'sigma_s': sigma, 'stream': stream, **shape}}], True, span_s=NOISE_SPAN_S,
+            full=smooth)
         return {q: v / sigma ** 2 if q in QUADRATIC else v for q, v in part.items()}
 
     def _jitter(self, i: int, params: dict) -> dict:
@@ -278,13 +276,12 @@ class EffectParts:
         encoder interval, 120 s at 200 Hz), and the stamp error is clipped at 0.45 interval.
         """
         sigma, stream = float(params['sigma_s']), float(params.get('stream', 2.0))
-        tau = float(params.get('tau_s', 0.0))
-        order = float(params.get('order', 1.0)) if tau else 1.0
-        grid = self._grid(i, stream, order)
+        shape = jitter_shape(params)
+        grid = self._grid(i, stream, shape.get('order', 1.0))
         x = float(np.clip(np.log(max(sigma, 1e-30)), np.log(grid[0]), np.log(grid[-1])))
         k = int(np.clip(np.searchsorted(np.log(grid), x) - 1, 0, grid.size - 2))
         f = (x - np.log(grid[k])) / (np.log(grid[k + 1]) - np.log(grid[k]))
-        lo, hi = (self._unit(i, stream, k, tau, order), self._unit(i, stream, k + 1, tau, order))
+        lo, hi = self._unit(i, stream, k, shape), self._unit(i, stream, k + 1, shape)
         return {q: (sigma ** 2 * ((1 - f) * lo[q] + f * hi[q]) if q in QUADRATIC else lo[q])
                 for q in lo}
 
@@ -353,6 +350,16 @@ class EffectParts:
         out += [self._bend(i, fx) for fx in det if fx['params'].get('on_output', 0)]
         return out + [self._jitter(i, fx['params']) for fx in effects
                       if fx['name'] == 'timestamp_jitter' and fx['params'].get('sigma_s', 0)]
+
+
+def jitter_shape(params: dict) -> dict:
+    """Return a stamp error's correlation parameters: a resonance's, tau_s (order 2), or none."""
+    if float(params.get('freq_hz', 0.0)):
+        return {'freq_hz': float(params['freq_hz']), 'q': float(params.get('q', 2.0))}
+    tau = float(params.get('tau_s', 0.0))
+    if not tau:
+        return {}
+    return {'tau_s': tau, **({'order': 2.0} if float(params.get('order', 1.0)) == 2.0 else {})}
 
 
 def combine(noise: dict, parts: Sequence[dict]) -> dict:

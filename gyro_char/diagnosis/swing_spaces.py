@@ -208,6 +208,40 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
                    start={**sp.start, 'lines': start})
 
 
+def with_stamp_band(spaces: List[EffectSpace], reals: Sequence[dict], ranges: Sequence[dict],
+                    simulate: Callable[[int, list, int], dict],
+                    bases: Sequence[SwingBaseline]) -> List[EffectSpace]:
+    """
+    Give the stamp error a resonant form, its centre started at the record's band.
+
+    A clock disciplined by an underdamped servo (a PLL, a PTP loop tuned fast) errs most
+    around the servo's frequency: a stamp error band-limited around f0 (``freq_hz``, quality
+    ``q``), which reads as residual noise rate x error in that band. Its centre starts at
+    the ``residual_psd`` bin where the records stand highest above a baseline twin (the one
+    ``signs`` probes with) and is searched from 1 Hz, or two swing frequencies, to a fifth
+    of the slower stream's rate; q from 0.6 (no peak) to 30.
+    """
+    excess = None
+    for i, r in enumerate(reals):
+        if 'residual_psd' not in r:
+            continue
+        ex = np.asarray(r['residual_psd']) - np.asarray(simulate(i, [], 4242)['residual_psd'])
+        excess = ex if excess is None else np.maximum(excess, ex)
+    lo = max(1.0, 2.0 / min(b.period_s for b in bases))
+    hi = 0.2 / max(max(b.dt, b.encoder_dt) for b in bases)
+    if excess is None or hi <= 2.0 * lo:
+        return spaces
+    band = np.asarray(ranges[0]['residual_psd'])[int(np.argmax(excess))]
+    start = float(np.clip(np.sqrt(band[0] * band[1]), lo, hi))
+    enc = min(b.encoder_dt for b in bases)
+    form = EffectSpace('timestamp_jitter', [
+        Param('sigma_s', 0.002 * enc, 0.4 * enc, init=0.02 * enc),
+        Param('freq_hz', lo, hi, init=start), Param('q', 0.6, 30.0, init=2.0)],
+        fixed={'stream': 2.0})
+    return [replace(sp, alternatives=tuple(sp.alternatives) + (form,))
+            if sp.name == 'timestamp_jitter' else sp for sp in spaces]
+
+
 def saturation_shown(crests: Sequence[tuple], bases: Sequence[SwingBaseline]) -> bool:
     """
     Return True if a record's output stays on one side below what its swing alone reaches.

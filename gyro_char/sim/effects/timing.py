@@ -8,12 +8,14 @@ effects move only the *stamps*, which is what a transport latency or a host-side
 ``time_delay`` may put part of its latency inside the gyro instead (``lag_s``: a one-pole
 low-pass on the rate values, which also colours the noise); ``timestamp_jitter`` may be
 correlated in time (``tau_s``: a first-order Gauss-Markov stamp error, or with ``order`` 2 a
-smooth second-order one: a clock offset slewed by a time-sync servo).
+smooth second-order one: a clock offset slewed by a time-sync servo; ``freq_hz``: a resonant
+one, the jitter peaking of an underdamped clock servo).
 """
 from gyro_char.errors import InputError
 from gyro_char.sim.chain import JITTER_CLIP
 from gyro_char.sim.effects.base import (describe_without, Effect, markov, one_pole, register,
                                         second_order_gm, table, table_params)
+from gyro_char.sim.effects.vibration import resonant_noise
 import numpy as np
 
 SPEED_ORDERS = (2, 4, 6, 8, 10, 12, 14)   # orders of the speed-dependent latency
@@ -93,22 +95,30 @@ class TimestampJitter(Effect):
                'sd at most 0.1 sample interval, e.g. a time-sync servo slewing the clock by '
                'milliseconds) is not clipped in level; its stamps are kept increasing. '
                'order = 2: the correlated error is second-order Gauss-Markov (the pole '
-               'twice): a clock offset that a servo slews without steps, PSD ~ f^-4.')
+               'twice): a clock offset that a servo slews without steps, PSD ~ f^-4. '
+               'freq_hz > 0 (tau_s and order then unused): the error is band-limited around '
+               'freq_hz with quality q, the AR(2) resonance of ``resonance``: the jitter '
+               'peaking of a clock disciplined by an underdamped servo (a PLL or a PTP '
+               'loop tuned fast), flat below freq_hz, peaked at it, falling as f^-4 above.')
     PARAMS = {'sigma_s': (50.0e-6, 's', 'standard deviation of the stamp error'),
               'stream': (2.0, '-', '0: IMU, 1: encoder, 2: both'),
               'tau_s': (0.0, 's', 'correlation time of the stamp error (0: white)'),
-              'order': (1.0, '-', 'with tau_s: 1 first-order Gauss-Markov, 2 smooth (second)')}
+              'order': (1.0, '-', 'with tau_s: 1 first-order Gauss-Markov, 2 smooth (second)'),
+              'freq_hz': (0.0, 'Hz', 'centre of a resonant stamp error (0: none)'),
+              'q': (2.0, '-', 'with freq_hz: quality factor of the resonance (>= 0.5)')}
 
     def check(self):
         if self.sigma_s < 0 or self.stream not in (0.0, 1.0, 2.0) or self.tau_s < 0 \
-                or self.order not in (1.0, 2.0):
-            raise InputError('timestamp_jitter: sigma_s >= 0, tau_s >= 0, stream in 0, 1, 2 '
-                             'and order 1 or 2')
+                or self.order not in (1.0, 2.0) or self.freq_hz < 0 or self.q < 0.5:
+            raise InputError('timestamp_jitter: sigma_s >= 0, tau_s >= 0, stream in 0, 1, 2, '
+                             'order 1 or 2, freq_hz >= 0 and q >= 0.5')
 
     def describe(self):
-        out = describe_without(self, 'tau_s')
-        if self.order == 1.0:
-            del out['params']['order']
+        out = describe_without(self, 'tau_s', 'freq_hz')
+        if self.order == 1.0 or self.freq_hz:
+            out['params'].pop('order', None)
+        if not self.freq_hz:
+            out['params'].pop('q', None)
         return out
 
     def _jitter(self, ctx, t, which):
@@ -117,6 +127,14 @@ class TimestampJitter(Effect):
         dt = float(np.median(np.diff(t)))
         lim = JITTER_CLIP * dt
         rng = ctx.rng(f'effect:{self.name}:{self.index}:{which}')
+        if self.freq_hz:
+            if self.freq_hz >= 0.5 / dt:
+                raise InputError(f'timestamp_jitter: freq_hz {self.freq_hz:g} is at or above '
+                                 f'the Nyquist frequency of the stream, {0.5 / dt:g} Hz')
+            e = self.sigma_s * resonant_noise(rng, t.size, self.freq_hz, self.q, dt)
+            if float(np.std(np.diff(e))) <= SLOW * dt:
+                return increasing(t + e, (1.0 - JITTER_CLIP) * dt)
+            return t + np.clip(e, -lim, lim)
         e = rng.standard_normal(t.size)
         if self.tau_s:
             phi = float(np.exp(-float(t[-1] - t[0]) / (t.size - 1) / self.tau_s))

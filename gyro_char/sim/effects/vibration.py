@@ -152,6 +152,17 @@ def resonance_coefficients(freq_hz: float, q: float, dt: float):
     return float(a1), float(a2), float(1.0 / gamma0)
 
 
+def resonant_noise(rng: np.random.Generator, n: int, freq_hz: float, q: float,
+                   dt: float) -> np.ndarray:
+    """Return n samples of the unit-variance AR(2) resonance, stationary from the first."""
+    a1, a2, var_e = resonance_coefficients(freq_hz, q, dt)
+    chol = np.linalg.cholesky(np.array([[1.0, a1 / (1.0 - a2)], [a1 / (1.0 - a2), 1.0]]))
+    y1, y2 = chol @ rng.standard_normal(2)       # x_(-1), x_(-2), stationary
+    e = np.sqrt(var_e) * rng.standard_normal(n)
+    zi = signal.lfiltic([1.0], [1.0, -a1, -a2], y=[y1, y2])
+    return signal.lfilter([1.0], [1.0, -a1, -a2], e, zi=zi)[0]
+
+
 @register
 class Resonance(Effect):
     """Band-limited rate noise around a frequency: a structural mode excited by broadband noise."""
@@ -180,16 +191,9 @@ class Resonance(Effect):
         if self.freq_hz >= 0.5 / ctx.dt_internal:
             raise InputError(f'resonance: freq_hz {self.freq_hz:g} is at or above the internal '
                              f'Nyquist frequency {0.5 / ctx.dt_internal:g} Hz')
-        a1, a2, var_e = resonance_coefficients(self.freq_hz, self.q, ctx.dt_internal)
-        g0 = 1.0
-        g1 = a1 / (1.0 - a2)
-        chol = np.linalg.cholesky(np.array([[g0, g1], [g1, g0]]))
         rng = self.rng(ctx)
         gyro = gyro.copy()
         for r in axis_rows(self):
-            y1, y2 = chol @ rng.standard_normal(2)       # x_(-1), x_(-2), stationary
-            e = np.sqrt(var_e) * rng.standard_normal(gyro.shape[1])
-            zi = signal.lfiltic([1.0], [1.0, -a1, -a2], y=[y1, y2])
-            x, _ = signal.lfilter([1.0], [1.0, -a1, -a2], e, zi=zi)
-            gyro[r] += self.sigma * x
+            gyro[r] += self.sigma * resonant_noise(rng, gyro.shape[1], self.freq_hz, self.q,
+                                                   ctx.dt_internal)
         return gyro, accel
