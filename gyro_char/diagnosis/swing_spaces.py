@@ -221,17 +221,17 @@ def with_stamp_band(spaces: List[EffectSpace], reals: Sequence[dict], ranges: Se
     ``signs`` probes with) and is searched from 1 Hz, or two swing frequencies, to a fifth
     of the slower stream's rate; q from 0.6 (no peak) to 30.
     """
-    excess = None
+    best, band = -np.inf, None
     for i, r in enumerate(reals):
         if 'residual_psd' not in r:
             continue
         ex = np.asarray(r['residual_psd']) - np.asarray(simulate(i, [], 4242)['residual_psd'])
-        excess = ex if excess is None else np.maximum(excess, ex)
+        if float(np.max(ex)) > best:
+            best, band = float(np.max(ex)), np.asarray(ranges[i]['residual_psd'])[np.argmax(ex)]
     lo = max(1.0, 2.0 / min(b.period_s for b in bases))
     hi = 0.2 / max(max(b.dt, b.encoder_dt) for b in bases)
-    if excess is None or hi <= 2.0 * lo:
+    if band is None or hi <= 2.0 * lo:
         return spaces
-    band = np.asarray(ranges[0]['residual_psd'])[int(np.argmax(excess))]
     start = float(np.clip(np.sqrt(band[0] * band[1]), lo, hi))
     enc = min(b.encoder_dt for b in bases)
     form = EffectSpace('timestamp_jitter', [
