@@ -279,3 +279,21 @@ def test_a_resonant_stamp_error_is_named_with_its_band():
     params = diag.steps[0]['params']
     assert 15.0 < params.get('freq_hz', 0.0) < 35.0
     assert diag.final_gap < diag.null_gap['q95'] < diag.baseline_gap
+
+
+def _resonant_forms(problem):
+    jitter = [s for s in problem.spaces if s.name == 'timestamp_jitter'][0]
+    return [a for a in jitter.alternatives if 'freq_hz' in {p.name for p in a.params}]
+
+
+def test_the_resonant_stamp_form_is_offered_unless_a_line_stands_out():
+    # Started at the residual PSD's band where a stamp error shows; left out where the encoder
+    # residual holds a line a decade above the twin (a cyclic error's chirp is a band in time).
+    imu, enc = _record([('timestamp_jitter', {'sigma_s': 6e-5, 'stream': 1.0,
+                                              'freq_hz': 25.0, 'q': 3.0})], 7)
+    forms = _resonant_forms(diag_swing.swing_problem(imu, enc, 5.0))
+    assert len(forms) == 1
+    start = [p for p in forms[0].params if p.name == 'freq_hz'][0].init
+    assert 10.0 < start <= 25.0
+    imu, enc = _record([('encoder_cyclic_error', {'lines': 1000.0, 'a1': 1e-4})], 7)
+    assert _resonant_forms(diag_swing.swing_problem(imu, enc, 5.0)) == []
