@@ -27,8 +27,9 @@ from gyro_char.diagnosis.swing_calibrate import (
     calibrate_encoder, calibrate_n, calibration_shifts, with_calibration_error)
 from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
 from gyro_char.diagnosis.swing_obs import layout, raw_parts, UNITS
-from gyro_char.diagnosis.swing_spaces import (signs, swing_spaces, unresolved_pairs,
-                                              with_saturation, with_stamp_band, with_tables)
+from gyro_char.diagnosis.swing_spaces import (
+    probe_twins, signs, swing_spaces, unresolved_pairs, with_saturation, with_stamp_band,
+    with_tables)
 from gyro_char.diagnosis.swing_twin import (
     record_observables, record_residuals, record_scale, simulate_twin, twin_config)
 from gyro_char.diagnosis.twins import twin_effects
@@ -145,8 +146,9 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     # their peak rates, well inside the spans' decades).
     longest = max(bases, key=lambda b: b.duration)
     spaces = [s for s in swing_spaces(longest) if s.name in names]
-    spaces = with_tables(signs(spaces, reals, simulate), bases, simulate)
-    spaces = with_stamp_band(spaces, reals, ranges, simulate, bases)
+    probe = probe_twins(len(reals), simulate)
+    spaces = with_tables(signs(spaces, reals, simulate, probe), bases, simulate, probe)
+    spaces = with_stamp_band(spaces, reals, ranges, probe, bases)
     crests = [(float(np.nanmax(imu.channels[ch])), -float(np.nanmin(imu.channels[ch])))
               for imu, _, _ in records]
     spaces = with_saturation(spaces, crests, bases)

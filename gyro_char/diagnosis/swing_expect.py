@@ -259,11 +259,11 @@ class EffectParts:
         # encoder interval by whole intervals, and with it how the interpolation passes the
         # encoder's noise on (the residual's increment correlation), which a noise-free run
         # cannot show.
-        smooth = shape.get('order') == 2.0
-        sigma = float(self._grid(i, stream, 2.0 if smooth else 1.0)[k])
+        order = shape.get('order', 1.0)
+        sigma = float(self._grid(i, stream, order)[k])
         part = self._single(i, [{'name': 'timestamp_jitter', 'params': {
             'sigma_s': sigma, 'stream': stream, **shape}}], True, span_s=NOISE_SPAN_S,
-            full=smooth)
+            full=order == 2.0)
         return {q: v / sigma ** 2 if q in QUADRATIC else v for q, v in part.items()}
 
     def _jitter(self, i: int, params: dict) -> dict:

@@ -29,6 +29,7 @@ CREST_SIGMAS = 2.5        # a crest below the peak plus this many sample sds: a 
 CREST_GRID = (0.6, 0.75, 0.85, 0.92, 0.96, 0.98, 0.99, 1.0, 1.02)
 ECE_TOP = 300.0           # cyclic error amplitudes searched up to this many encoder sds
 HARMONICS = {f'a{k}': k for k in (2, 3, 4)}   # the cyclic error's harmonic amplitudes
+PROBE_SEED = 4242         # seed of the twins the search's start-ups compare and probe with
 
 
 def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
@@ -100,8 +101,14 @@ SIGNED = {'time_delay': ['delay_s'], 'g_sensitivity': ['gy'],
           'scale_factor_nonlinearity': ['k2', 'k3'], 'scale_factor_asymmetry': ['a']}
 
 
+def probe_twins(n: int, simulate: Callable[[int, list, int], dict]) -> list:
+    """Return the baseline twins of ``PROBE_SEED`` of n records: the start-ups' yardstick."""
+    return [simulate(i, [], PROBE_SEED) for i in range(n)]
+
+
 def signs(spaces: List[EffectSpace], reals: Sequence[dict],
-          simulate: Callable[[int, list, int], dict]) -> List[EffectSpace]:
+          simulate: Callable[[int, list, int], dict],
+          base: Optional[list] = None) -> List[EffectSpace]:
     """
     Give each signed parameter the sign that moves the twins towards the record.
 
@@ -113,11 +120,12 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
     3f line of a compressive read-out. With several records (``simulate(record, effects, seed)``
     as in ``diagnose.Problem``) the departures of all of them are projected together.
     The encoder cyclic error's line count is started at the records' line (``with_lines``).
+    ``base``: the records' ``probe_twins``, if already run.
     """
     idx = range(len(reals))
     blocks = [b for b in ('quadrature', 'harmonic_2f', 'harmonic_3f', 'harmonic_high')
               if all(b in reals[i] for i in idx)]
-    base = [simulate(i, [], 4242) for i in idx]
+    base = probe_twins(len(reals), simulate) if base is None else base
     dev = np.concatenate([reals[i][b] - base[i][b] for i in idx for b in blocks])
     out = []
     for sp in spaces:
@@ -127,7 +135,7 @@ def signs(spaces: List[EffectSpace], reals: Sequence[dict],
         for p in sp.params:
             if p.name in SIGNED.get(sp.name, []):
                 mid = float(np.sqrt(p.lo * p.hi))
-                up, down = ([simulate(i, [(sp.name, {**sp.fixed, p.name: v})], 4242)
+                up, down = ([simulate(i, [(sp.name, {**sp.fixed, p.name: v})], PROBE_SEED)
                              for i in idx] for v in (mid, -mid))
                 resp = np.concatenate([up[i][b] - down[i][b] for i in idx for b in blocks])
                 sign = 1.0 if float(np.einsum('i,i->', resp, dev)) >= 0 else -1.0
@@ -210,23 +218,21 @@ def with_lines(sp: EffectSpace, reals: Sequence[dict], base: Sequence[dict]) -> 
 
 
 def with_stamp_band(spaces: List[EffectSpace], reals: Sequence[dict], ranges: Sequence[dict],
-                    simulate: Callable[[int, list, int], dict],
-                    bases: Sequence[SwingBaseline]) -> List[EffectSpace]:
+                    base: Sequence[dict], bases: Sequence[SwingBaseline]) -> List[EffectSpace]:
     """
     Give the stamp error a resonant form, its centre started at the record's band.
 
     A clock disciplined by an underdamped servo (a PLL, a PTP loop tuned fast) errs most
     around the servo's frequency: a stamp error band-limited around f0 (``freq_hz``, quality
     ``q``), which reads as residual noise rate x error in that band. Its centre starts at
-    the ``residual_psd`` bin where the records stand highest above a baseline twin (the one
-    ``signs`` probes with) and is searched from 1 Hz, or two swing frequencies, to a fifth
+    the ``residual_psd`` bin where the records stand highest above their ``probe_twins``
+    (``base``) and is searched from 1 Hz, or two swing frequencies, to a fifth
     of the slower stream's rate; q from 0.6 (no peak) to 30. Not offered where the encoder
     residual shows a line ``LINE_GATE`` above the twin: a cyclic error's chirp (1000 lines
     at 0.44 rad/s sweep 0-70 Hz) is a band in time too, and at 0.4 ms the resonant jitter
     took the development set's strong cyclic error (lines 2.7 above the twin; stamp errors
     strong enough to raise the residual PSD a decade raise no band above 0.7).
     """
-    base = [simulate(i, [], 4242) for i in range(len(reals))]
     if any(np.any(ex > LINE_GATE) for _, _, ex in line_bands(reals, base)):
         return spaces
     best, band = -np.inf, None
@@ -338,7 +344,8 @@ TABLE_UNIT = 1e-4     # rad/s or s: a coefficient's probe runs (the blocks are l
 
 
 def with_tables(spaces: List[EffectSpace], bases: Sequence[SwingBaseline],
-                simulate: Callable[[int, list, int], dict]) -> List[EffectSpace]:
+                simulate: Callable[[int, list, int], dict],
+                zero: Optional[list] = None) -> List[EffectSpace]:
     """
     Give the rate- and tilt-shaped effects a tabulated alternative, solved by least squares.
 
@@ -349,12 +356,13 @@ def with_tables(spaces: List[EffectSpace], bases: Sequence[SwingBaseline],
     latency) or of the tilt's specific force (odd, for the g-sensitivity).
     Its harmonic blocks are linear in the coefficients: one probe run per coefficient and
     record gives their change per unit (``LinearTerms``), and every fit solves the
-    coefficients on what the model leaves (``fit.solve_linear``).
+    coefficients on what the model leaves (``fit.solve_linear``). ``zero``: the records'
+    ``probe_twins``, if already run.
     """
     rate = TABLE_MARGIN * max(b.peak_rate for b in bases)
     tilt = TABLE_MARGIN * G0 * np.sin(max(b.amplitude for b in bases))
     idx = range(len(bases))
-    zero = [simulate(i, [], 4242) for i in idx]
+    zero = probe_twins(len(bases), simulate) if zero is None else zero
     probed = {}
 
     def basis(name: str, probe: dict, names: tuple) -> tuple:
@@ -362,7 +370,8 @@ def with_tables(spaces: List[EffectSpace], bases: Sequence[SwingBaseline],
         if key not in probed:
             out = []
             for i in idx:
-                runs = [simulate(i, [(name, {**probe, n: TABLE_UNIT})], 4242) for n in names]
+                runs = [simulate(i, [(name, {**probe, n: TABLE_UNIT})], PROBE_SEED)
+                        for n in names]
                 out.append({b: np.array([(o[b] - zero[i][b]) / TABLE_UNIT for o in runs])
                             for b in TABLE_BLOCKS if b in zero[i]})
             probed[key] = tuple(out)

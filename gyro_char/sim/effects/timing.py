@@ -131,17 +131,15 @@ class TimestampJitter(Effect):
             if self.freq_hz >= 0.5 / dt:
                 raise InputError(f'timestamp_jitter: freq_hz {self.freq_hz:g} is at or above '
                                  f'the Nyquist frequency of the stream, {0.5 / dt:g} Hz')
-            e = self.sigma_s * resonant_noise(rng, t.size, self.freq_hz, self.q, dt)
-            if float(np.std(np.diff(e))) <= SLOW * dt:
-                return increasing(t + e, (1.0 - JITTER_CLIP) * dt)
-            return t + np.clip(e, -lim, lim)
-        e = rng.standard_normal(t.size)
-        if self.tau_s:
-            phi = float(np.exp(-float(t[-1] - t[0]) / (t.size - 1) / self.tau_s))
-            e = (second_order_gm(phi, e, (e[0], rng.standard_normal())) if self.order == 2.0
-                 else markov(e, phi))
+            e = resonant_noise(rng, t.size, self.freq_hz, self.q, dt)
+        else:
+            e = rng.standard_normal(t.size)
+            if self.tau_s:
+                phi = float(np.exp(-float(t[-1] - t[0]) / (t.size - 1) / self.tau_s))
+                e = (second_order_gm(phi, e, (e[0], rng.standard_normal()))
+                     if self.order == 2.0 else markov(e, phi))
         e *= self.sigma_s
-        if self.tau_s and float(np.std(np.diff(e))) <= SLOW * dt:
+        if (self.tau_s or self.freq_hz) and float(np.std(np.diff(e))) <= SLOW * dt:
             return increasing(t + e, (1.0 - JITTER_CLIP) * dt)
         return t + np.clip(e, -lim, lim)
 
