@@ -53,6 +53,15 @@ def stand(t):
     return AMP * np.sin(W * t), AMP * W * np.cos(W * t)
 
 
+def stand_of(period, amp=AMP):
+    """Return the true (angle, rate) of a swing of ``amp`` rad and ``period`` seconds."""
+    w = 2 * np.pi / period
+
+    def stand_at(t):
+        return amp * np.sin(w * t), amp * w * np.cos(w * t)
+    return stand_at
+
+
 def fold_lines(err, kmax=60, kmin=2):
     """Norm of lines kmin..kmax of ``err`` folded over the 5 s swing period (1 kHz samples)."""
     m = 5000

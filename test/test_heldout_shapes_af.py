@@ -4,7 +4,7 @@
 """Generator tests of held-out swing set AF."""
 import bench_script
 
-from heldout_common import AMP, G0, W
+from heldout_common import AMP, G0, stand_of, W
 from heldout_common import rng, swing, swing_set_tests, unit_stamp_errors
 
 import numpy as np
@@ -20,15 +20,6 @@ BIAS = -0.58 * np.pi / 180.0                              # the preset's x-gyro 
 OFF = {'time_delay': {'d': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'e': 0.0}, 'scale_factor_asymmetry': {'kappa': 0.0},
        'timestamp_jitter': {'sigma': 0.0}, 'encoder_cyclic_error': {'a': 0.0}}
-
-
-def stand_of(period):
-    """Return the true (angle, rate) of a 20 deg swing of ``period`` seconds."""
-    w = 2 * np.pi / period
-
-    def stand(t):
-        return AMP * np.sin(w * t), AMP * w * np.cos(w * t)
-    return stand
 
 
 (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,

@@ -4,7 +4,7 @@
 """Generator tests of held-out swing set AG."""
 import bench_script
 
-from heldout_common import AMP, G0, W
+from heldout_common import AMP, G0, stand_of, W
 from heldout_common import rng, swing_set_tests, unit_stamp_errors
 
 import numpy as np
@@ -20,15 +20,6 @@ S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per
 OFF = {'time_delay': {'d': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'e': 0.0}, 'scale_factor_asymmetry': {'a': 0.0},
        'timestamp_jitter': {'sigma': 0.0}, 'encoder_cyclic_error': {'a': 0.0}}
-
-
-def stand_of(period, amp=AMP):
-    """Return the true (angle, rate) of a swing of ``amp`` rad and ``period`` seconds."""
-    w = 2 * np.pi / period
-
-    def stand(t):
-        return amp * np.sin(w * t), amp * w * np.cos(w * t)
-    return stand
 
 
 def run(name, p, seconds, period=5.0, amp=AMP, seed=10, noise=0.0):
