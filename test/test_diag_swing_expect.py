@@ -2,7 +2,7 @@
 import json
 
 from gyro_char.cli import main
-from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing, swing_expect
+from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing, swing_gains
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
 import numpy as np
@@ -47,6 +47,18 @@ CASES = {
         'k2': 0.0, 'range_rads': 0.41, 'windup_s': 50.0})], 'quadrature'),
     'time_delay_speed': ([('time_delay', {'delay_s': 0.0, 'table_rads': 0.46, 'd2': 2e-3,
                                           'd4': -5e-4})], 'harmonic_3f'),
+    # Noise that follows the rate, each 0.4 N² in mean power (the twin's own white noise
+    # gives up as much): a white scale-factor noise, the same on one driver half only (seen
+    # by the sign of the rate), a noisier range above 0.3 rad/s, with its own gain too.
+    'scale_factor_noise': ([('scale_factor_nonlinearity', {'k2': 0.0, 'sf_noise': 1.1e-3})],
+                           'rate_locked'),
+    'scale_factor_asymmetry_noise': ([('scale_factor_asymmetry', {
+        'a': 0.0, 'sf_noise': 1.55e-3})], 'rate_sign'),
+    'scale_factor_noise_gated': ([('scale_factor_nonlinearity', {
+        'k2': 0.0, 'gate_noise': 4.7e-4, 'noise_gate_rads': 0.3})], 'rate_locked'),
+    'scale_factor_switch': ([('scale_factor_nonlinearity', {
+        'k2': 0.0, 'gate_noise': 4.7e-4, 'noise_gate_rads': 0.3, 'gate_gain': 0.01})],
+        'harmonic_3f'),
 }
 # rms over a block's elements of (pseudo-twins' mean - twins' mean) / standard error of that
 # difference.
@@ -157,15 +169,15 @@ def test_a_limit_restores_the_noise_the_record_lost_at_it():
     # is free. For a clip, that share is the time the swing's rate stays inside the limits;
     # a loop that winds up holds the limit longer, past each crest.
     cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': 200.0}})
-    clean = simulator.simulate_swing(swing_expect.clean_config(cfg), seed=0, duration=60.0,
+    clean = simulator.simulate_swing(swing_gains.clean_config(cfg), seed=0, duration=60.0,
                                      channels=('gyro_x',)).imu.channels['gyro_x']
     peak, bias = (clean.max() - clean.min()) / 2, (clean.max() + clean.min()) / 2
     limit = 0.37
     held = (np.arccos((limit - bias) / peak) + np.arccos((limit + bias) / peak)) / np.pi
     clip = [{'name': 'scale_factor_nonlinearity', 'params': {'k2': 0.0, 'range_rads': limit}}]
-    gain = swing_expect.limit_gain(cfg, clip, 'x', 60.0)
+    gain = swing_gains.limit_gain(cfg, clip, 'x', 60.0)
     assert 0.2 < held < 0.5
     assert gain == pytest.approx(1.0 / (1.0 - held), rel=0.01)
     wound = [{'name': 'scale_factor_nonlinearity', 'params': {
         'k2': 0.0, 'range_rads': limit, 'windup_s': 50.0}}]
-    assert swing_expect.limit_gain(cfg, wound, 'x', 60.0) > 1.05 * gain
+    assert swing_gains.limit_gain(cfg, wound, 'x', 60.0) > 1.05 * gain

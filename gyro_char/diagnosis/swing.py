@@ -27,6 +27,7 @@ from gyro_char.diagnosis.swing_calibrate import (
     calibrate_encoder, calibrate_n, calibration_shifts, with_calibration_error)
 from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
 from gyro_char.diagnosis.swing_obs import layout, raw_parts, UNITS
+from gyro_char.diagnosis.swing_rate_noise import with_rate_noise
 from gyro_char.diagnosis.swing_spaces import (
     probe_twins, signs, swing_spaces, unresolved_pairs, with_saturation, with_stamp_band,
     with_tables)
@@ -151,7 +152,7 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     spaces = with_stamp_band(spaces, reals, ranges, probe, bases)
     crests = [(float(np.nanmax(imu.channels[ch])), -float(np.nanmin(imu.channels[ch])))
               for imu, _, _ in records]
-    spaces = with_saturation(spaces, crests, bases)
+    spaces = with_rate_noise(with_saturation(spaces, crests, bases), bases)
     units = dict(UNITS, scale_factor_shift='rad/s')
     baseline = bases[0].to_json()
     if len(bases) > 1:

@@ -32,94 +32,28 @@ noise-only run on a grid of lags (``EffectParts._lag``). What this leaves out:
 the cross terms' extra spread (the pseudo-twins' spread is the baseline's) and the effects'
 interaction with quantization; ``--check`` simulates the selected model's twins in full.
 """
-from dataclasses import replace
 from typing import Callable, Dict, List, Sequence, Tuple
 
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_obs import finish, layout, raw_parts, residuals
+from gyro_char.diagnosis.swing_gains import (
+    clean_config, lag_gain, limit_gain, limits_of, noise_config, span)
+from gyro_char.diagnosis.swing_obs import finish, raw_parts, residuals
+from gyro_char.diagnosis.swing_rate_noise import (
+    gate_grid, gate_weights, PLAIN_OFF, rate_noise_gain, split, unit_level)
 from gyro_char.records import ENCODER_CHANNEL
 from gyro_char.sim import simulator
 from gyro_char.sim.chain import JITTER_CLIP
-from gyro_char.sim.config import BenchConfig
 import numpy as np
 
-SPAN_S = 60.0           # span of the noise-free effect runs (whole periods, at least 8)
 NOISE_EFFECTS = ('timestamp_jitter',)
 LINEAR = ('harm', 'scale')
-QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'acf', 'locked')
+QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'msd', 'acf', 'locked')
 NOISE_SPAN_S = 240.0    # span of the jitter's runs (at most the record)
 LIMIT_SPAN_S = np.inf  # a full-scale limit's noisy runs: the whole record (``_cut``)
 JITTER_GRID = 8         # stamp errors run, log-spaced from 0.2 % to 45 % of the intervals
 SMOOTH_GRID = (0.05, 20.0)  # a smooth stamp error's grid, in intervals (``_unit``)
 LAG_GRID = (0.05, 20.0, 16)     # gyro lags run: from, to (gyro sample intervals), count
-
-
-def clean_config(cfg: BenchConfig) -> BenchConfig:
-    """
-    ``cfg`` with every noise and quantization off: the stand's motion only.
-
-    The sampling jitter of the instants stays (values and stamps agree, so it adds no error,
-    but it spreads where the gyro stamps fall between encoder samples, which sets how much of
-    an encoder stamp error the interpolation passes on).
-    """
-    g = replace(cfg.gyro, output_step=0.0, misalignment_noise=0.0)
-    e = replace(cfg.encoder, adc_noise=0.0, level_step=0.0, word_step=0.0)
-    st = replace(cfg.stand, amplitude_noise=0.0, drift_rate_noise=0.0)
-    noise = {ch: dict.fromkeys(v, 0.0) for ch, v in cfg.noise.items()}
-    return replace(cfg, gyro=g, encoder=e, stand=st, noise=noise)
-
-
-def noise_config(cfg: BenchConfig) -> BenchConfig:
-    """``clean_config`` with the gyro's noise terms kept: the motion and the gyro noise."""
-    return replace(clean_config(cfg), noise=cfg.noise)
-
-
-def lag_gain(lag_s: float, dt: float, period_s: float) -> float:
-    """
-    Return the gyro noise power a lag candidate's twin restores: 1 / median |H|² of the bins.
-
-    The baseline's N is pinned on the record's residual PSD by the median bin ratio against a
-    WHITE twin (``swing_calibrate.calibrate_n``); a record whose gyro has the one-pole H reads
-    N² times that median of |H|², so a twin that applies H must start from N² over it
-    (measured: a 5 ms lag left the twins' low PSD bins 17 % short without this).
-    """
-    if not lag_s:
-        return 1.0
-    a = lag_s / (lag_s + dt)
-    f = np.sqrt(np.prod(layout(0, dt, period_s)['residual_psd'], axis=1))
-    h2 = (1 - a) ** 2 / (1 - 2 * a * np.cos(2 * np.pi * f * dt) + a * a)
-    return float(1.0 / np.median(h2))
-
-
-def limits_of(effects: Sequence[dict]) -> List[dict]:
-    """Return the effects (simulator specs) that hold a full-scale limit (``range_rads``)."""
-    return [fx for fx in effects if fx['params'].get('range_rads', 0)]
-
-
-def limit_gain(cfg: BenchConfig, limits: list, axis: str, duration: float) -> float:
-    """
-    Return the gyro noise power a limit candidate's twin restores: 1 / the time it is free.
-
-    Where the output sits at its limit its noise is gone, so the baseline's N, pinned on the
-    clipped record's residual PSD, is the sensor's times the root of the share of time the
-    output moves; a twin that applies the limit must start from N² over that share, or it
-    cuts the noise twice (measured: 13 % of the time at the limit on held-out set I's
-    strong clip). The share from a noise-free run of ``limits`` over ``duration``.
-    """
-    run = simulator.simulate_swing(clean_config(cfg), seed=0, duration=duration,
-                                   effects=limits, channels=(f'gyro_{axis}',))
-    x = run.imu.channels[f'gyro_{axis}']
-    p = limits[0]['params']
-    hi = float(p['range_rads'])
-    lo = float(p.get('range_low_rads', 0.0)) or hi
-    held = (x >= hi * (1 - 1e-9)) | (x <= -lo * (1 - 1e-9))
-    return float(1.0 / max(1.0 - held.mean(), 0.1))
-
-
-def span(base: SwingBaseline) -> float:
-    """Duration of the noise-free effect runs: whole periods, >= ``SPAN_S`` and 8 periods."""
-    k = int(np.ceil(max(SPAN_S, 8.0 * base.period_s) / base.period_s))
-    return float(min(k * base.period_s + 2.0 * base.dt, base.duration))
+WHITE_GRID = (1.0 / 16.0, 0.25, 1.0)    # the gyro white power's scalings run (``_white_share``)
 
 
 class EffectParts:
@@ -329,9 +263,68 @@ class EffectParts:
             self.cache[key] = {**share, 'line2': share['mean2']}
         return self.cache[key]
 
+    def _rate_unit(self, i: int, name: str, level: dict) -> dict:
+        # A rate noise alone at unit level (``unit_level``) over NOISE_SPAN_S, as a noise part.
+        fx = {'name': name, 'params': {**PLAIN_OFF[name], **level}}
+        return self._single(i, [fx], True, span_s=NOISE_SPAN_S)
+
+    def _white_share(self, i: int, gain: float) -> tuple:
+        """
+        Return (the gyro noise's parts, their change when N² is scaled by ``gain``).
+
+        The parts of R(sqrt(g) w + c) (w: the white noise, c: the correlated B and K, one
+        realisation) are a + b g + c' sqrt(g) in g, so three runs (g = 1/16, 1/4, 1: at
+        g = 0 the simulator would draw c from other numbers) give the change at any g, the
+        correlated terms' own parts untouched.
+        """
+        grid = np.array(WHITE_GRID)
+        runs = [self._as_noise(i, self._noise_alone(i, [], gain=g), NOISE_SPAN_S)
+                for g in WHITE_GRID]
+        inv = np.linalg.inv(np.column_stack([np.ones(3), grid, np.sqrt(grid)]))
+        out = {}
+        for q in QUADRATIC:
+            coef = np.tensordot(inv, np.stack([np.asarray(r[q], float) for r in runs]), 1)
+            out[q] = coef[1] * (gain - 1.0) + coef[2] * (np.sqrt(gain) - 1.0)
+        p1 = runs[-1]
+        return p1, out
+
+    def _rate_noise(self, i: int, noises: list) -> dict:
+        """
+        Return the rate-dependent noises' part (``swing_rate_noise``), N's share included.
+
+        Linear in the noise's power: a white scale-factor noise's quadratic parts are its
+        unit run's times (sf_noise / unit)², a gated one's interpolated between unit runs on
+        a grid of gates (one realisation, common to all). The twin's own gyro white noise
+        gives up the mean power added (``rate_noise_gain``): its noise-alone parts times the
+        gain less one, and no twin keeps less than that share of its power (``floor``).
+        """
+        b = self.bases[i]
+        gain = rate_noise_gain(noises, b)
+        plain, acc = self._white_share(i, gain)
+        for fx in noises:
+            name, p = fx['name'], fx['params']
+            sf, gate = float(p.get('sf_noise', 0.0)), float(p.get('gate_noise', 0.0))
+            terms = []
+            if sf:
+                unit = unit_level(name, b, False)
+                terms.append(((sf / unit['sf_noise']) ** 2, self._rate_unit(i, name, unit)))
+            where = gate_weights(float(p.get('noise_gate_rads', 0.0)), gate_grid(b))
+            if gate and where is not None:
+                k, f = where
+                unit = unit_level(name, b, True)
+                for j, w in ((k, 1.0 - f), (k + 1, f)):
+                    run = self._rate_unit(i, name, {**unit,
+                                                    'noise_gate_rads': gate_grid(b)[j]})
+                    terms.append((w * (gate / unit['gate_noise']) ** 2, run))
+            for w, run in terms:
+                acc = {q: acc[q] + w * run[q] for q in QUADRATIC}
+        return {**plain, **acc, 'floor': {'psd': gain, 'mean2': gain}}
+
     def part(self, i: int, effects: list) -> List[dict]:
         """Return D's raw parts on record ``i``: the deterministic effects', then noises'."""
-        det = [fx for fx in effects if fx['name'] not in NOISE_EFFECTS]
+        pairs = [split(fx) for fx in effects if fx['name'] not in NOISE_EFFECTS]
+        det = [d for d, _ in pairs if d is not None]
+        noises = [n for _, n in pairs if n is not None]
         # A full-scale limit acts on the noise too (it cuts what reaches past it, on one side
         # only: E clip(w + n) is not clip(w), the whole effect of a limit just below the peak
         # rate, and it smooths the clipped corners): its part is run with the twin's noise
@@ -348,6 +341,7 @@ class EffectParts:
         out += [self._lag(i, float(fx['params']['lag_s'])) for fx in det
                 if fx['name'] == 'time_delay' and fx['params'].get('lag_s', 0)]
         out += [self._bend(i, fx) for fx in det if fx['params'].get('on_output', 0)]
+        out += [self._rate_noise(i, noises)] if noises else []
         return out + [self._jitter(i, fx['params']) for fx in effects
                       if fx['name'] == 'timestamp_jitter' and fx['params'].get('sigma_s', 0)]
 

@@ -36,6 +36,10 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
   rate² (``rate_locked``). An encoder stamp error δ reads as an angle error rate · δ, a noise
   whose variance grows as the rate squared; the gyro's white noise, the quantizations and
   the encoder's white noise do not depend on the swing phase;
+- ``rate_sign``: per |cos θ| bin (but the slowest), the increments' mean square where the
+  rate is negative less where it is positive, over the bin's: zero for every noise that
+  follows the rate's size alone (a stamp error, a scale-factor noise), not for one on one
+  sign of the rate (one driver half noisier than the other);
 - ``increment_acf``: normalised autocorrelation at lags 1..4 of the GYRO-stamp residual's
   increments (harmonics 1..16 out and high-passed like the encoder-stamp one). This is the
   residual's whiteness, not the swing filter's innovations (``swing.batch`` folds rows into
@@ -109,12 +113,14 @@ def layout(n_psd: int, dt: float, period_s: float) -> dict:
             'residual_psd': np.c_[edges[:-1], edges[1:]],
             'encoder_lines': np.c_[LINE_EDGES[:-1], LINE_EDGES[1:]],
             'rate_locked': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
+            'rate_sign': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
             'increment_acf': np.c_[lags, lags]}
 
 
 UNITS = {'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
          'harmonic_high': 'Hz', 'locked_power': 'Hz', 'residual_psd': 'Hz',
-         'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|', 'increment_acf': 's'}
+         'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|', 'rate_sign': '|cos(phase)|',
+         'increment_acf': 's'}
 
 
 def highpass(x: np.ndarray, n: int) -> np.ndarray:
@@ -168,14 +174,23 @@ def band_peaks(lines: np.ndarray, amp: np.ndarray,
     return peaks, where
 
 
-def rate_bins(th: np.ndarray, d: np.ndarray, peak_rate: float) -> Tuple[np.ndarray, np.ndarray]:
-    """Per |cos th| bin: mean square of the increments ``d`` and mean squared swing rate."""
+def rate_bins(th: np.ndarray, d: np.ndarray, peak_rate: float) -> Tuple[np.ndarray, ...]:
+    """
+    Return per |cos th| bin the increments' mean square, mean squared rate and sign split.
+
+    The split: the mean square of ``d`` where cos th < 0 less where cos th > 0 (``rate_sign``).
+    """
     nb = len(RATE_EDGES) - 1
-    c = np.abs(np.cos(th))
-    k = np.clip(np.digitize(c, RATE_EDGES) - 1, 0, nb - 1)
+    c = np.cos(th)
+    k = np.clip(np.digitize(np.abs(c), RATE_EDGES) - 1, 0, nb - 1)
     cnt = np.maximum(np.bincount(k, minlength=nb), 1)
-    return (np.bincount(k, d * d, minlength=nb) / cnt,
-            peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt)
+    d2 = d * d
+    neg = c < 0
+    side = [np.bincount(k[m], d2[m], minlength=nb) / np.maximum(
+        np.bincount(k[m], minlength=nb), 1) for m in (neg, ~neg)]
+    return (np.bincount(k, d2, minlength=nb) / cnt,
+            peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt,
+            side[0] - side[1])
 
 
 def rate_locked_of(ms: np.ndarray, w2: np.ndarray) -> np.ndarray:
@@ -194,7 +209,18 @@ def rate_locked_of(ms: np.ndarray, w2: np.ndarray) -> np.ndarray:
 
 def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
     """Apparent stamp-error variance per |cos th| bin of the increments ``d`` (asinh, µs²)."""
-    return rate_locked_of(*rate_bins(th, d, peak_rate))
+    return rate_locked_of(*rate_bins(th, d, peak_rate)[:2])
+
+
+def rate_sign_of(msd: np.ndarray, ms: np.ndarray) -> np.ndarray:
+    """
+    ``rate_sign`` from ``rate_bins``: negative- less positive-rate mean square, over the bin's.
+
+    A ratio, not ``rate_locked``'s asinh: the difference is zero-mean on most records, where
+    the asinh of a spread far above 1 µs² splits into two lobes at +-log, and a shift of the
+    mean shows only a few sds.
+    """
+    return msd[1:] / np.maximum(ms[1:], 1e-300)
 
 
 def increment_sums(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
@@ -289,7 +315,8 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
 
     The record's own streams by default, on the geometry of ``res``. Linear parts (``harm``:
     the harmonic coefficients) or quadratic ones (``psd`` power per bin, ``line2`` squared
-    line peaks and ``mean2`` mean squared amplitude per band, ``ms`` rate-bin mean squares,
+    line peaks and ``mean2`` mean squared amplitude per band, ``ms`` rate-bin mean squares
+    and ``msd`` their negative-less-positive-rate difference,
     ``acf`` lagged sums), so that the parts of a sum of independent residuals add in
     expectation. ``finish`` turns them into the blocks.
     """
@@ -323,12 +350,13 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     # of 3 on clean records): a constant, so that they score nothing.
     above = LINE_EDGES[1:] > np.pi / max(res.peak_rate * res.dt_e, 1e-300)
     hp_eu = highpass(r_eu, int(round(HP_SECONDS / res.dt_e)))
-    ms, w2 = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_eu), res.peak_rate)
+    ms, w2, msd = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_eu),
+                            res.peak_rate)
     acf = increment_sums(highpass(r_u, int(round(HP_SECONDS / res.dt))))
     # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
     return {'harm': np.r_[h[1:6], high], 'psd': psd, 'locked': locked_bands(mean, f0, res.dt),
             'line2': peaks * peaks, 'mean2': mean2, 'where': where,
-            'above': above, 'ms': ms, 'w2': w2, 'acf': acf}
+            'above': above, 'ms': ms, 'w2': w2, 'msd': msd, 'acf': acf}
 
 
 def finish(raw: dict) -> 'SwingObs':
@@ -343,6 +371,7 @@ def finish(raw: dict) -> 'SwingObs':
                     'residual_psd': np.log10(np.maximum(raw['psd'], 1e-300)),
                     'encoder_lines': lines,
                     'rate_locked': rate_locked_of(raw['ms'], raw['w2']),
+                    'rate_sign': rate_sign_of(raw['msd'], raw['ms']),
                     'increment_acf': c[1:] / max(c[0], 1e-300)})
     out.line_peaks = where
     return out

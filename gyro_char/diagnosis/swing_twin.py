@@ -8,7 +8,7 @@ streams and observables of ``swing_obs``) and ``record_scale`` (its least-square
 from typing import Sequence
 
 from gyro_char.diagnosis.swing_baseline import PRESET, SwingBaseline
-from gyro_char.diagnosis.swing_expect import lag_gain, limit_gain, limits_of, span
+from gyro_char.diagnosis.swing_gains import twin_noise_gain
 from gyro_char.diagnosis.swing_obs import residuals, solve_columns, swing_observables
 from gyro_char.diagnosis.twins import twin_effects
 from gyro_char.records import ENCODER_CHANNEL, Recording
@@ -44,24 +44,17 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
 
     A stamp delay candidate starts the gyro's instants that much earlier, so that its stamps
     fall where the record's do (``stamp_offset`` measured them delay included); a gyro lag
-    (``lag_s``) leaves the stamps alone and restores the noise the N calibration took for
-    the lag's (``swing_expect.lag_gain``); a full-scale limit restores the noise the record
-    lost at the limit (``swing_expect.limit_gain``).
+    (``lag_s``) leaves the stamps alone; a lag, a full-scale limit and a rate-dependent
+    noise set the twin's gyro white noise (``swing_gains.twin_noise_gain``).
     """
     cfg = twin_config(base)
-    ch = f'gyro_{base.axis}'
-    for n, p in effects:
-        if n == 'time_delay':
-            cfg.noise[ch]['N'] *= np.sqrt(lag_gain(float(p.get('lag_s', 0.0)), base.dt,
-                                                   base.period_s))
-    limits = limits_of(twin_effects(effects))
-    if limits:
-        # The share is read off a noise-free run of this config (its noise set to zero).
-        cfg.noise[ch]['N'] *= np.sqrt(limit_gain(cfg, limits, base.axis, span(base)))
+    specs = twin_effects(effects)
+    # The gain is read off noise-free runs of this config (its noise set to zero there).
+    cfg.noise[f'gyro_{base.axis}']['N'] *= np.sqrt(twin_noise_gain(cfg, base, specs))
     cfg.gyro.start_s -= sum(float(p.get('delay_s', 0.0)) - float(p.get('lag_s', 0.0))
                             for n, p in effects if n == 'time_delay')
     run = simulator.simulate_swing(cfg, duration=base.duration,
-                                   seed=int(seed), effects=twin_effects(effects),
+                                   seed=int(seed), effects=specs,
                                    channels=(f'gyro_{base.axis}',))
     return run.imu, run.encoder
 

@@ -52,7 +52,11 @@ class ScaleFactorNonlinearity(Effect):
                'offset converter clips one side first); windup_s > 0: the rate the output '
                'could not follow is owed and paid back once in range (a rebalance loop whose '
                'integrator winds up), the debt forgotten with time constant windup_s '
-               '(``saturate``).')
+               '(``saturate``). sf_noise > 0: a white scale-factor noise, omega_out += omega '
+               's(t), s of density sf_noise (the gain of a noisy reference or drive); '
+               'gate_noise > 0: white noise of that density added wherever |omega| > '
+               'noise_gate_rads, and gate_gain: omega_out += gate_gain omega there (a range '
+               'switched in above a rate, with its own noise and gain) (``rate_noise``).')
     PARAMS = {'k2': (1.0e-3, '1/(rad/s)', 'quadratic coefficient'),
               'k3': (0.0, '1/(rad/s)^2', 'cubic coefficient'),
               'k5': (0.0, '1/(rad/s)^4', 'fifth-order coefficient'),
@@ -63,17 +67,24 @@ class ScaleFactorNonlinearity(Effect):
               'range_rads': (0.0, 'rad/s', 'full-scale limit of the output (0: none)'),
               'range_low_rads': (0.0, 'rad/s', 'negative-side limit (0: range_rads)'),
               'windup_s': (0.0, 's', 'memory of the rate owed while saturated (0: none)'),
+              'sf_noise': (0.0, '1/sqrt(Hz)', 'white scale-factor noise density (0: none)'),
+              'gate_noise': (0.0, 'rad/s/sqrt(Hz)', 'noise density above the gate (0: none)'),
+              'noise_gate_rads': (0.0, 'rad/s', 'rate above which gate_noise is added'),
+              'gate_gain': (0.0, '1', 'scale-factor change above noise_gate_rads'),
               **table_params('c', ODD_ORDERS, 'rad/s', 'tabulated deviation')}
 
     def check(self):
         if min(self.tau_s, self.lock_in, self.table_rads, self.range_rads,
-               self.range_low_rads, self.windup_s) < 0:
+               self.range_low_rads, self.windup_s, self.sf_noise, self.gate_noise,
+               self.noise_gate_rads) < 0:
             raise InputError('scale_factor_nonlinearity: tau_s, lock_in, table_rads, '
-                             'range_rads, range_low_rads and windup_s must be >= 0')
+                             'range_rads, range_low_rads, windup_s, sf_noise, gate_noise and '
+                             'noise_gate_rads must be >= 0')
 
     def describe(self):
         return describe_without(self, 'tau_s', 'lock_in', 'table_rads', 'on_output',
-                                'range_rads', 'range_low_rads', 'windup_s',
+                                'range_rads', 'range_low_rads', 'windup_s', 'sf_noise',
+                                'gate_noise', 'noise_gate_rads', 'gate_gain',
                                 *(f'c{n}' for n in ODD_ORDERS))
 
     def sensor(self, ctx, gyro, accel):
@@ -86,6 +97,9 @@ class ScaleFactorNonlinearity(Effect):
             gyro = gyro + np.sign(w) * np.sqrt(np.maximum(w2 - self.lock_in ** 2, 0.0)) - w
         gyro = gyro + table(self, 'c', ODD_ORDERS, w, self.table_rads,
                             sensed=sensed if self.on_output else None)
+        if self.gate_gain:
+            gyro = gyro + self.gate_gain * w * (np.abs(w) > self.noise_gate_rads)
+        gyro = gyro + rate_noise(self, ctx, rate_noise_level(self.params, w))
         if self.range_rads > 0.0:
             low = self.range_low_rads or self.range_rads
             gyro = np.vstack([saturate(row, (-low, self.range_rads), self.windup_s,
@@ -152,19 +166,23 @@ class ScaleFactorAsymmetry(Effect):
                'omega_out += sum_n c_n (T_n(omega / table_rads) - T_n(0)), n = 2, 4, ..., 16 '
                '(a one-sided gain, a diode, a driver half that saturates first): on a swing '
                'of peak table_rads, c_n is the rate line at n f; on_output 1: it bends the '
-               'sensed value, noise included.')
+               'sensed value, noise included. sf_noise > 0: a white scale-factor noise on '
+               'negative rates only, omega_out += min(omega, 0) s(t), s of density sf_noise '
+               '(one driver half noisier than the other) (``rate_noise``).')
     PARAMS = {'a': (1.0e-3, '1', 'half the difference of the two scale factors'),
               'tau_s': (0.0, 's', 'relaxation time of the switch after a reversal (0: at once)'),
               'table_rads': (0.0, 'rad/s', 'range of the tabulated difference (0: none)'),
               'on_output': (0.0, '1', '1: the table acts on the sensed value, noise included'),
+              'sf_noise': (0.0, '1/sqrt(Hz)', 'scale-factor noise density on negative rates'),
               **table_params('c', EVEN_ORDERS, 'rad/s', 'tabulated difference')}
 
     def check(self):
-        if self.tau_s < 0 or self.table_rads < 0:
-            raise InputError('scale_factor_asymmetry: tau_s and table_rads must be >= 0')
+        if min(self.tau_s, self.table_rads, self.sf_noise) < 0:
+            raise InputError('scale_factor_asymmetry: tau_s, table_rads and sf_noise must be '
+                             '>= 0')
 
     def describe(self):
-        return describe_without(self, 'tau_s', 'table_rads', 'on_output',
+        return describe_without(self, 'tau_s', 'table_rads', 'on_output', 'sf_noise',
                                 *(f'c{n}' for n in EVEN_ORDERS))
 
     def sensor(self, ctx, gyro, accel):
@@ -172,7 +190,32 @@ class ScaleFactorAsymmetry(Effect):
         side = one_pole(np.sign(w), self.tau_s, ctx.dt_internal, start='periodic')
         extra = table(self, 'c', EVEN_ORDERS, w, self.table_rads, even=True,
                       sensed=gyro if self.on_output else None)
-        return gyro + self.a * w * side + extra, accel
+        noise = rate_noise(self, ctx, rate_noise_level(self.params, w, one_sided=True))
+        return gyro + self.a * w * side + extra + noise, accel
+
+
+def rate_noise_level(params: dict, w: np.ndarray, one_sided: bool = False):
+    """
+    Return the density (rad/s/sqrt(Hz)) of a rate-dependent white noise at rates ``w``.
+
+    ``sf_noise`` |w| (a scale-factor noise; ``one_sided``: on negative rates only) plus
+    ``gate_noise`` wherever |w| > ``noise_gate_rads``; None where both are off. The
+    diagnosis reads the same function for the noise power a twin's N gives up.
+    """
+    sf, gate = float(params.get('sf_noise', 0.0)), float(params.get('gate_noise', 0.0))
+    if not sf and not gate:
+        return None
+    level = sf * (np.maximum(-w, 0.0) if one_sided else np.abs(w))
+    if gate:
+        level = level + gate * (np.abs(w) > float(params.get('noise_gate_rads', 0.0)))
+    return level
+
+
+def rate_noise(effect: Effect, ctx, level) -> np.ndarray:
+    """White rate noise of density ``level`` (per sample, per axis) at the internal rate."""
+    if level is None:
+        return 0.0
+    return level / np.sqrt(ctx.dt_internal) * effect.rng(ctx).standard_normal(level.shape)
 
 
 @register
