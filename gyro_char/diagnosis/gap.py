@@ -24,7 +24,7 @@ GAP_METRIC = 'rms_z_in_baseline_scatter'
 # element must not turn a rounding difference into an infinite z.
 SCATTER_FLOOR = {'adev': 0.002, 'psd': 0.002, 'tone': 0.01, 'acf': 0.001, 'drift': 1e-9,
                  'encoder_lines': 0.02, 'rate_locked': 0.002, 'rate_sign': 1e-4,
-                 'increment_acf': 0.001}
+                 'rate_acf': 1e-4, 'increment_acf': 0.001}
 Obs = Dict[str, np.ndarray]
 
 

@@ -47,7 +47,7 @@ import numpy as np
 
 NOISE_EFFECTS = ('timestamp_jitter',)
 LINEAR = ('harm', 'scale')
-QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'msd', 'acf', 'locked')
+QUADRATIC = ('psd', 'line2', 'mean2', 'ms', 'msd', 'mp', 'acf', 'locked')
 NOISE_SPAN_S = 240.0    # span of the jitter's runs (at most the record)
 LIMIT_SPAN_S = np.inf  # a full-scale limit's noisy runs: the whole record (``_cut``)
 JITTER_GRID = 8         # stamp errors run, log-spaced from 0.2 % to 45 % of the intervals
@@ -318,7 +318,7 @@ class EffectParts:
                     terms.append((w * (gate / unit['gate_noise']) ** 2, run))
             for w, run in terms:
                 acc = {q: acc[q] + w * run[q] for q in QUADRATIC}
-        return {**plain, **acc, 'floor': {'psd': gain, 'mean2': gain}}
+        return {**plain, **acc, 'floor': dict.fromkeys(('psd', 'mean2', 'ms', 'locked'), gain)}
 
     def part(self, i: int, effects: list) -> List[dict]:
         """Return D's raw parts on record ``i``: the deterministic effects', then noises'."""

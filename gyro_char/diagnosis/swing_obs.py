@@ -40,6 +40,9 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
   rate is negative less where it is positive, over the bin's: zero for every noise that
   follows the rate's size alone (a stamp error, a scale-factor noise), not for one on one
   sign of the rate (one driver half noisier than the other);
+- ``rate_acf``: per |cos θ| bin (but the slowest), the increments' lag-1 product less the
+  slowest bin's, over the bin's mean square: about -1/2 of the rate's share for a stamp
+  error (white in the angle), 0 for a rate noise (white in the rate);
 - ``increment_acf``: normalised autocorrelation at lags 1..4 of the GYRO-stamp residual's
   increments (harmonics 1..16 out and high-passed like the encoder-stamp one). This is the
   residual's whiteness, not the swing filter's innovations (``swing.batch`` folds rows into
@@ -114,13 +117,14 @@ def layout(n_psd: int, dt: float, period_s: float) -> dict:
             'encoder_lines': np.c_[LINE_EDGES[:-1], LINE_EDGES[1:]],
             'rate_locked': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
             'rate_sign': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
+            'rate_acf': np.c_[RATE_EDGES[1:-1], RATE_EDGES[2:]],
             'increment_acf': np.c_[lags, lags]}
 
 
 UNITS = {'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
          'harmonic_high': 'Hz', 'locked_power': 'Hz', 'residual_psd': 'Hz',
          'encoder_lines': '1/rev', 'rate_locked': '|cos(phase)|', 'rate_sign': '|cos(phase)|',
-         'increment_acf': 's'}
+         'rate_acf': '|cos(phase)|', 'increment_acf': 's'}
 
 
 def highpass(x: np.ndarray, n: int) -> np.ndarray:
@@ -176,9 +180,10 @@ def band_peaks(lines: np.ndarray, amp: np.ndarray,
 
 def rate_bins(th: np.ndarray, d: np.ndarray, peak_rate: float) -> Tuple[np.ndarray, ...]:
     """
-    Return per |cos th| bin the increments' mean square, mean squared rate and sign split.
+    Return per |cos th| bin the increments' mean square, mean squared rate, split and lag 1.
 
-    The split: the mean square of ``d`` where cos th < 0 less where cos th > 0 (``rate_sign``).
+    The split: the mean square of ``d`` where cos th < 0 less where cos th > 0 (``rate_sign``);
+    lag 1: the mean of d_j d_(j+1) (``rate_acf``).
     """
     nb = len(RATE_EDGES) - 1
     c = np.cos(th)
@@ -188,9 +193,10 @@ def rate_bins(th: np.ndarray, d: np.ndarray, peak_rate: float) -> Tuple[np.ndarr
     neg = c < 0
     side = [np.bincount(k[m], d2[m], minlength=nb) / np.maximum(
         np.bincount(k[m], minlength=nb), 1) for m in (neg, ~neg)]
+    pairs = np.maximum(np.bincount(k[:-1], minlength=nb), 1)
     return (np.bincount(k, d2, minlength=nb) / cnt,
             peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt,
-            side[0] - side[1])
+            side[0] - side[1], np.bincount(k[:-1], d[:-1] * d[1:], minlength=nb) / pairs)
 
 
 def rate_locked_of(ms: np.ndarray, w2: np.ndarray) -> np.ndarray:
@@ -221,6 +227,19 @@ def rate_sign_of(msd: np.ndarray, ms: np.ndarray) -> np.ndarray:
     mean shows only a few sds.
     """
     return msd[1:] / np.maximum(ms[1:], 1e-300)
+
+
+def rate_acf_of(mp: np.ndarray, ms: np.ndarray) -> np.ndarray:
+    """
+    ``rate_acf`` from ``rate_bins``: the lag-1 product less the slowest bin's, over the bin's ms.
+
+    What the rate adds to the increments, and how it correlates at lag 1: a stamp error's
+    angle error rate x error is white, its increments -1/2 correlated; a rate noise (a
+    scale-factor noise, a noisier range) is white in the rate, its increments uncorrelated.
+    The slowest bin's product takes out what does not follow the rate (the encoder's white
+    noise, -1/2 correlated too).
+    """
+    return (mp[1:] - mp[0]) / np.maximum(ms[1:], 1e-300)
 
 
 def increment_sums(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
@@ -316,7 +335,7 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     The record's own streams by default, on the geometry of ``res``. Linear parts (``harm``:
     the harmonic coefficients) or quadratic ones (``psd`` power per bin, ``line2`` squared
     line peaks and ``mean2`` mean squared amplitude per band, ``ms`` rate-bin mean squares
-    and ``msd`` their negative-less-positive-rate difference,
+    and ``msd`` their negative-less-positive-rate difference, ``mp`` lag-1 products,
     ``acf`` lagged sums), so that the parts of a sum of independent residuals add in
     expectation. ``finish`` turns them into the blocks.
     """
@@ -350,13 +369,13 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     # of 3 on clean records): a constant, so that they score nothing.
     above = LINE_EDGES[1:] > np.pi / max(res.peak_rate * res.dt_e, 1e-300)
     hp_eu = highpass(r_eu, int(round(HP_SECONDS / res.dt_e)))
-    ms, w2, msd = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_eu),
-                            res.peak_rate)
+    ms, w2, msd, mp = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_eu),
+                                res.peak_rate)
     acf = increment_sums(highpass(r_u, int(round(HP_SECONDS / res.dt))))
     # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
     return {'harm': np.r_[h[1:6], high], 'psd': psd, 'locked': locked_bands(mean, f0, res.dt),
             'line2': peaks * peaks, 'mean2': mean2, 'where': where,
-            'above': above, 'ms': ms, 'w2': w2, 'msd': msd, 'acf': acf}
+            'above': above, 'ms': ms, 'w2': w2, 'msd': msd, 'mp': mp, 'acf': acf}
 
 
 def finish(raw: dict) -> 'SwingObs':
@@ -372,6 +391,7 @@ def finish(raw: dict) -> 'SwingObs':
                     'encoder_lines': lines,
                     'rate_locked': rate_locked_of(raw['ms'], raw['w2']),
                     'rate_sign': rate_sign_of(raw['msd'], raw['ms']),
+                    'rate_acf': rate_acf_of(raw['mp'], raw['ms']),
                     'increment_acf': c[1:] / max(c[0], 1e-300)})
     out.line_peaks = where
     return out

@@ -26,6 +26,7 @@ TITLES = {'adev': 'Allan deviation (log10 rad/s) vs τ (s)',
           'encoder_lines': 'encoder residual vs angle: peak (log10 rad) vs lines/rev',
           'rate_locked': 'rate-locked stamp variance (asinh σ²/µs²) vs |cos θ|',
           'rate_sign': 'increments² at negative less positive rate, over both, vs |cos θ|',
+          'rate_acf': 'lag-1 increment product less the slowest bin’s, over ms, vs |cos θ|',
           'increment_acf': 'residual increments: autocorrelation vs lag (s)',
           'scale_factor_shift': "scale factor minus run 1's vs peak rate (rad/s)"}
 LOG_X = {'adev', 'psd', 'drift', 'residual_psd', 'encoder_lines'}
