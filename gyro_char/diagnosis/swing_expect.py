@@ -5,9 +5,10 @@ The observables are functions of the residual streams (``swing_obs.raw_parts``):
 (the harmonic coefficients, the least-squares scale) and quadratic ones (Welch power, squared
 line peaks, rate-bin mean squares, lagged increment sums). Every swing effect of the catalogue
 is either DETERMINISTIC given the stand motion (time_delay, g_sensitivity, the scale-factor
-nonlinearity and asymmetry, encoder_cyclic_error) or a white noise independent of the
-baseline's (timestamp_jitter). A candidate's residual is then the baseline twin's noise
-residual N plus the effect's own residual D, and for its observables:
+nonlinearity and asymmetry, encoder_cyclic_error) or a noise independent of the baseline's
+(timestamp_jitter; the scale-factor effects' rate noise, ``_rate_noise``). A candidate's
+residual is then the baseline twin's noise residual N plus the effect's own residual D, and
+for its observables:
 
 - linear parts: exactly N's plus D's (the residual fit is a fixed projection);
 - quadratic parts: the twin's residual is A + N with A the motion's own deterministic part
