@@ -80,6 +80,25 @@ def rng(seed):
     return np.random.default_rng(seed)
 
 
+def swing_runner(shapes):
+    """Return ``run(name, p, seconds, ...)`` of a swing set's ``shapes`` (its tests' driver)."""
+    def run(name, p, seconds, period=5.0, amp=AMP, seed=10, noise=0.0, stand=None):
+        """Return (t, angle, rate, gyro in, fn's output) on a 1 kHz swing of ``seconds``."""
+        stand = stand or stand_of(period, amp)
+        t = np.arange(int(round(seconds * 1000))) * 1e-3
+        angle, rate = stand(t)
+        x = rate + noise * rng(seed + 1).standard_normal(t.size)
+        out = shapes[name][0](t, x.copy(), t.copy(), angle.copy(), stand, rng(seed), **p)
+        return t, angle, rate, x, out
+    return run
+
+
+def lines(err, per):
+    """Return the complex Fourier series (rfft over n) of ``err`` folded over ``per`` samples."""
+    fold = err[:err.size // per * per].reshape(-1, per).mean(axis=0)
+    return np.fft.rfft(fold) / per
+
+
 def white(n, seed):
     """White rate noise of the harness's level plus a small bias (a static record)."""
     return SIG * rng(seed).standard_normal(n) + 0.003

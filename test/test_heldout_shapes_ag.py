@@ -4,7 +4,7 @@
 """Generator tests of held-out swing set AG."""
 import bench_script
 
-from heldout_common import AMP, G0, stand_of, W
+from heldout_common import AMP, G0, swing_runner, W
 from heldout_common import rng, swing_set_tests, unit_stamp_errors
 
 import numpy as np
@@ -20,16 +20,7 @@ S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per
 OFF = {'time_delay': {'d': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'e': 0.0}, 'scale_factor_asymmetry': {'a': 0.0},
        'timestamp_jitter': {'sigma': 0.0}, 'encoder_cyclic_error': {'a': 0.0}}
-
-
-def run(name, p, seconds, period=5.0, amp=AMP, seed=10, noise=0.0):
-    """Return (t, angle, rate, gyro in, fn's output) on a 1 kHz swing of ``seconds``."""
-    t = np.arange(int(round(seconds * 1000))) * 1e-3
-    angle, rate = stand_of(period, amp)(t)
-    x = rate + noise * rng(seed + 1).standard_normal(t.size)
-    out = SHAPES[name][0](t, x.copy(), t.copy(), angle.copy(), stand_of(period, amp), rng(seed),
-                          **p)
-    return t, angle, rate, x, out
+run = swing_runner(SHAPES)
 
 
 (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,

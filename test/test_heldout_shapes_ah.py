@@ -4,7 +4,7 @@
 """Generator tests of held-out swing set AH."""
 import bench_script
 
-from heldout_common import AMP, G0, stand_of, W
+from heldout_common import AMP, G0, lines, swing_runner, W
 from heldout_common import rng, swing_set_tests
 
 import numpy as np
@@ -20,22 +20,7 @@ S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per
 OFF = {'time_delay': {'s': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'k': 0.0}, 'scale_factor_asymmetry': {'k': 0.0},
        'timestamp_jitter': {'m': 0.0}, 'encoder_cyclic_error': {'a': 0.0}}
-
-
-def run(name, p, seconds, period=5.0, amp=AMP, seed=10, noise=0.0, stand=None):
-    """Return (t, angle, rate, gyro in, fn's output) on a 1 kHz swing of ``seconds``."""
-    stand = stand or stand_of(period, amp)
-    t = np.arange(int(round(seconds * 1000))) * 1e-3
-    angle, rate = stand(t)
-    x = rate + noise * rng(seed + 1).standard_normal(t.size)
-    out = SHAPES[name][0](t, x.copy(), t.copy(), angle.copy(), stand, rng(seed), **p)
-    return t, angle, rate, x, out
-
-
-def lines(err, per):
-    """Return the complex Fourier series (rfft over n) of ``err`` folded over ``per`` samples."""
-    fold = err[:err.size // per * per].reshape(-1, per).mean(axis=0)
-    return np.fft.rfft(fold) / per
+run = swing_runner(SHAPES)
 
 
 (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,

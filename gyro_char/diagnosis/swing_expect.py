@@ -156,7 +156,7 @@ class EffectParts:
                 'name': 'time_delay', 'params': {'delay_s': lag, 'lag_s': lag}}])]
             part = {q: g * out[1][q] - out[0][q] for q in QUADRATIC}
             floor = {q: np.minimum(g * out[1][q] / np.maximum(out[0][q], 1e-300), 1.0)
-                     for q in ('psd', 'mean2')}
+                     for q in ('psd', 'mean2', 'ms')}
             self.cache[key] = {**self._as_noise(i, {**out[0], **part}, NOISE_SPAN_S),
                                'floor': floor}
         return self.cache[key]
