@@ -159,6 +159,53 @@ def swing_scales(period_s: float, duration: float):
     return n_arw, cfg.stand.amplitude, cfg.encoder, w, n_arw * np.sqrt(2 / duration)
 
 
+def solve_level(zof, z: float, guess: float, slope: float = 1.0, limit: float = np.inf,
+                steps: int = 30) -> float:
+    """
+    Return the x at which ``zof(x)`` is z: a secant in log-log from ``guess``.
+
+    ``slope`` is the first guess of d ln z / d ln x; ``limit`` caps each step's ratio (a z that
+    is not monotonic far from the root, e.g. a delay's, would otherwise send a step astray).
+    """
+    def step(x, zx, s):
+        return x * float(np.clip((z / zx) ** (1.0 / s), 1.0 / limit, limit))
+    x0, z0 = guess, zof(guess)
+    x1 = step(x0, z0, slope)
+    z1 = zof(x1)
+    for _ in range(steps):
+        if abs(z1 / z - 1.0) < 1e-4:
+            break
+        s = np.log(z1 / z0) / np.log(x1 / x0)
+        x0, z0, x1 = x1, z1, step(x1, z1, s)
+        z1 = zof(x1)
+    return float(x1)
+
+
+def solved_levels(detectability, key: dict, guess: dict, targets, names=None, slope=None,
+                  limit=None, digits: int = 3, steps: int = 30) -> dict:
+    """
+    Return a swing set's ``{name: [weak, strong, edge]}``: each level solved for z = targets.
+
+    ``detectability(name, params)`` is the set's analytic z; ``key`` maps a name to its one
+    parameter, ``guess`` to its starting value, ``slope`` / ``limit`` (optional, per name) to
+    ``solve_level``'s; values rounded to ``digits`` significant digits.
+    """
+    slope, limit = slope or {}, limit or {}
+
+    def level(name, z):
+        x = solve_level(lambda v: detectability(name, {key[name]: v}), z, guess[name],
+                        slope.get(name, 1.0), limit.get(name, np.inf), steps)
+        return {key[name]: float(f'{x:.{digits}g}')}
+    return {name: [level(name, z) for z in targets] for name in (names or key)}
+
+
+def print_levels(levels: dict, detectability, periods=(5.0, 2.5)) -> None:
+    """Print each level with its z at each swing period (a set's ``__main__``)."""
+    for name, value in levels.items():
+        print(name, value, *[[round(detectability(name, p, period_s=ps), 2) for p in value]
+                             for ps in periods])
+
+
 def self_check(shapes, detectability, bias: float, n: int = 720000) -> None:
     """
     Build a held-out set's 27 records as the harness does and time them.

@@ -77,7 +77,8 @@ power-on head errors a of 0.043, 0.27 and 1.08 arcsec on the 864 arcsec pitch.
 """
 from functools import lru_cache
 
-from heldout_detect import encoder_floor, matched_z, period_lines, stamp_z, swing_scales
+from heldout_detect import encoder_floor, matched_z, period_lines, print_levels
+from heldout_detect import solved_levels, stamp_z, swing_scales
 
 import numpy as np
 
@@ -300,28 +301,11 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
     return matched_z(fitted_residual(err, t, phi, rate_hz), rate_hz, n_arw, floor)
 
 
-def solve_level(name: str, z: float, guess: float) -> float:
-    """Return the parameter at which ``detectability(name)`` is z (secant in log-log)."""
-    def zof(x):
-        return detectability(name, {KEY[name]: x})
-    x0, z0 = guess, zof(guess)
-    x1 = x0 * (z / z0) ** (0.5 if name == 'timestamp_jitter' else 1.0)
-    z1 = zof(x1)
-    for _ in range(20):
-        if abs(z1 / z - 1.0) < 1e-4:
-            break
-        slope = np.log(z1 / z0) / np.log(x1 / x0)
-        x0, z0, x1 = x1, z1, x1 * (z / z1) ** (1.0 / slope)
-        z1 = zof(x1)
-    return float(x1)
-
-
 def levels(names=None, digits: int = 3) -> dict:
     """Return ``{name: [weak, strong, edge]}`` solved for z = TARGETS, to ``digits`` digits."""
-    return {name: [{KEY[name]: float(f'{solve_level(name, z, GUESS[name]):.{digits}g}')}
-                   for z in TARGETS] for name in (names or KEY)}
+    return solved_levels(detectability, KEY, GUESS, TARGETS, names,
+                         slope={'timestamp_jitter': 2.0}, steps=20, digits=digits)
 
 
 if __name__ == '__main__':
-    for key, value in levels().items():
-        print(key, value, [round(detectability(key, p), 2) for p in value])
+    print_levels(levels(), detectability, periods=(5.0,))

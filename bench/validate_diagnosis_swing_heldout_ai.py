@@ -79,7 +79,8 @@ play 1.0x, smudge 0.78x). Physical scale: oscillator errors eps of 17.4 (edge), 
 """
 from functools import lru_cache
 
-from heldout_detect import encoder_floor, matched_z, stamp_z, swing_scales
+from heldout_detect import encoder_floor, matched_z, print_levels, solved_levels
+from heldout_detect import stamp_z, swing_scales
 
 import numpy as np
 
@@ -323,29 +324,11 @@ def detectability(name: str, params: dict, period_s: float = 5.0, duration: floa
     return matched_z(fitted_residual(err, t, phi, rate_hz), rate_hz, n_arw, floor)
 
 
-def solve_level(name: str, z: float, guess: float) -> float:
-    """Return the parameter at which ``detectability(name)`` is z (secant in log-log)."""
-    def zof(x):
-        return detectability(name, {KEY[name]: x})
-    x0, z0 = guess, zof(guess)
-    x1 = x0 * (z / z0) ** (1.0 / SLOPE.get(name, 1.0))
-    z1 = zof(x1)
-    for _ in range(30):
-        if abs(z1 / z - 1.0) < 1e-4:
-            break
-        slope = np.log(z1 / z0) / np.log(x1 / x0)
-        x0, z0, x1 = x1, z1, x1 * (z / z1) ** (1.0 / slope)
-        z1 = zof(x1)
-    return float(x1)
-
-
 def levels(names=None, digits: int = 3) -> dict:
     """Return ``{name: [weak, strong, edge]}`` solved for z = TARGETS, to ``digits`` digits."""
-    return {name: [{KEY[name]: float(f'{solve_level(name, z, GUESS[name]):.{digits}g}')}
-                   for z in TARGETS] for name in (names or KEY)}
+    return solved_levels(detectability, KEY, GUESS, TARGETS, names, slope=SLOPE,
+                         digits=digits)
 
 
 if __name__ == '__main__':
-    for key, value in levels().items():
-        print(key, value, [round(detectability(key, p), 2) for p in value],
-              [round(detectability(key, p, period_s=2.5), 2) for p in value])
+    print_levels(levels(), detectability)
