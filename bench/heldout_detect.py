@@ -202,7 +202,7 @@ def solved_levels(detectability, key: dict, guess: dict, targets, names=None, sl
 def print_levels(levels: dict, detectability, periods=(5.0, 2.5)) -> None:
     """Print each level with its z at each swing period (a set's ``__main__``)."""
     for name, value in levels.items():
-        print(name, value, *[[round(detectability(name, p, period_s=ps), 2) for p in value]
+        print(name, value, *[[round(float(detectability(name, p, period_s=ps)), 2) for p in value]
                              for ps in periods])
 
 
