@@ -1,5 +1,5 @@
 """
-What the held-out shape tests (sets C to N) share: the bench numbers and the set checks.
+What the held-out shape tests share: the bench numbers, the preset noise and the set checks.
 
 Generators only, never the diagnosis: each set's own file checks its shapes' physics; here
 are the checks every set passes (names, edge levels at z ~ 4, finite output, both harnesses
@@ -20,6 +20,8 @@ W = 2 * np.pi / PERIOD
 G0 = 9.80665
 INC = N_ARW * np.sqrt(DT)       # the static records' white-noise angle step per sample
 # sd of a fitted rate-residual sine on a 900 s swing run of the preset's gyro
+# the preset gyro's per-sample noise at 1 kHz (its ARW, 1.89 deg/sqrt(h))
+S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)
 S_LINE = BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
 STATIC_NAMES = ['internal_lowpass', 'vibration', 'temperature_drift', 'bias_instability',
                 'rate_random_walk', 'gauss_markov', 'quantization', 'resonance']
@@ -185,6 +187,27 @@ def swing_set_tests(module, off):
 
     return (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,
             test_off_levels_leave_the_run_unchanged)
+
+
+def solved_levels_test(module, names=None):
+    """
+    Return a test that the set's literal levels are those ``module.levels`` solves.
+
+    ``names`` the shapes to check (all of ``module.KEY`` by default; the slow solves left out).
+    """
+    shapes = module.shapes(1000.0)
+
+    @pytest.mark.parametrize('name', sorted(module.KEY) if names is None else names)
+    def test_levels_are_the_solved_ones(name):
+        assert module.levels([name])[name] == shapes[name][1], name
+
+    return test_levels_are_the_solved_ones
+
+
+def period_z_ratio(module, name, level=2):
+    """Return the z of a shape's level at the 2.5 s period over that at 5 s."""
+    p = module.shapes(1000.0)[name][1][level]
+    return module.detectability(name, p, period_s=2.5) / module.detectability(name, p)
 
 
 def unit_stamp_errors(fn, sigma, seed0, runs=4):

@@ -2,14 +2,13 @@
 # what their docstring claims, the edges sit at z ~ 4, and the swing harness reaches the set by
 # --held-out ae. THE GENERATORS only, never the diagnosis.
 import bench_script
-from heldout_common import (AMP, G0, rng, swing, swing_set_tests, unit_stamp_errors,
+from heldout_common import (AMP, G0, rng, S_N, swing, swing_set_tests, unit_stamp_errors,
                             W)
 import numpy as np
 import pytest
 
 SWING = bench_script.load('validate_diagnosis_swing_heldout_ae')
 SHAPES = SWING.shapes(1000.0)
-S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per-sample noise
 OFF = {'time_delay': {'slew': np.inf}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'r': np.inf}, 'scale_factor_asymmetry': {'a': 0.0},
        'timestamp_jitter': {'sigma': 0.0}, 'encoder_cyclic_error': {'o': 0.0}}

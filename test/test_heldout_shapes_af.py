@@ -5,7 +5,7 @@
 import bench_script
 
 from heldout_common import AMP, G0, stand_of, W
-from heldout_common import rng, swing, swing_set_tests, unit_stamp_errors
+from heldout_common import rng, S_N, swing, swing_set_tests, unit_stamp_errors
 
 import numpy as np
 
@@ -15,7 +15,6 @@ from scipy import signal
 
 SWING = bench_script.load('validate_diagnosis_swing_heldout_af')
 SHAPES = SWING.shapes(1000.0)
-S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per-sample noise
 BIAS = -0.58 * np.pi / 180.0                              # the preset's x-gyro bias, rad/s
 OFF = {'time_delay': {'d': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'e': 0.0}, 'scale_factor_asymmetry': {'kappa': 0.0},

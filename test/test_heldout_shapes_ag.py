@@ -5,7 +5,7 @@
 import bench_script
 
 from heldout_common import AMP, G0, swing_runner, W
-from heldout_common import rng, swing_set_tests, unit_stamp_errors
+from heldout_common import rng, S_N, solved_levels_test, swing_set_tests, unit_stamp_errors
 
 import numpy as np
 
@@ -16,7 +16,6 @@ from scipy import signal, special
 SWING = bench_script.load('validate_diagnosis_swing_heldout_ag')
 SETS = bench_script.load('heldout_sets')
 SHAPES = SWING.shapes(1000.0)
-S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per-sample noise
 OFF = {'time_delay': {'d': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'e': 0.0}, 'scale_factor_asymmetry': {'a': 0.0},
        'timestamp_jitter': {'sigma': 0.0}, 'encoder_cyclic_error': {'a': 0.0}}
@@ -26,12 +25,9 @@ run = swing_runner(SHAPES)
 (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,
  test_off_levels_leave_the_run_unchanged) = swing_set_tests(SWING, OFF)
 
-
-@pytest.mark.parametrize('name', ['g_sensitivity', 'scale_factor_nonlinearity',
-                                  'scale_factor_asymmetry'])
-def test_levels_are_the_solved_ones(name):
-    """Check the literal levels against ``levels`` (z = 25, 100, 4) for the quick shapes."""
-    assert SWING.levels([name])[name] == SHAPES[name][1]
+# the quick shapes' solves only
+test_levels_are_the_solved_ones = solved_levels_test(
+    SWING, ['g_sensitivity', 'scale_factor_nonlinearity', 'scale_factor_asymmetry'])
 
 
 def test_playout_buffer_follows_the_worst_recent_latency():

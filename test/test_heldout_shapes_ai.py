@@ -5,7 +5,7 @@
 import bench_script
 
 from heldout_common import AMP, G0, lines, swing_runner, W
-from heldout_common import rng, swing_set_tests
+from heldout_common import period_z_ratio, rng, S_N, solved_levels_test, swing_set_tests
 
 import numpy as np
 
@@ -16,27 +16,16 @@ from scipy import signal, stats
 SWING = bench_script.load('validate_diagnosis_swing_heldout_ai')
 SETS = bench_script.load('heldout_sets')
 SHAPES = SWING.shapes(1000.0)
-S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per-sample noise
 OFF = {'time_delay': {'eps': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'a': 0.0}, 'scale_factor_asymmetry': {'a': 0.0},
        'timestamp_jitter': {'slot': 0.0}, 'encoder_cyclic_error': {'a': 0.0}}
 run = swing_runner(SHAPES)
 
 
-def z_ratio(name, level=2):
-    """Return the z of a level at the 2.5 s period over that at 5 s."""
-    p = SHAPES[name][1][level]
-    return SWING.detectability(name, p, period_s=2.5) / SWING.detectability(name, p)
-
-
 (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,
  test_off_levels_leave_the_run_unchanged) = swing_set_tests(SWING, OFF)
 
-
-@pytest.mark.parametrize('name', sorted(SWING.KEY))
-def test_levels_are_the_solved_ones(name):
-    """Check the literal levels against ``levels`` (z = 25, 100, 4)."""
-    assert SWING.levels([name])[name] == SHAPES[name][1]
+test_levels_are_the_solved_ones = solved_levels_test(SWING)
 
 
 def test_counted_stamps_ramp_from_each_resync_and_drop_back():
@@ -83,7 +72,7 @@ def test_counted_stamps_ramp_from_each_resync_and_drop_back():
     assert SWING.counted_mean(eps) == pytest.approx(mean, rel=1e-9)
     assert SWING.counted_mean(eps) == pytest.approx(10.83 * eps, rel=1e-3)   # docstring
     assert np.mean(means) == pytest.approx(SWING.counted_mean(eps), rel=0.1)
-    assert z_ratio('time_delay') == pytest.approx(4.0, rel=0.01)
+    assert period_z_ratio(SWING, 'time_delay') == pytest.approx(4.0, rel=0.01)
 
 
 def test_play_sticks_after_each_turning_point():
@@ -121,7 +110,7 @@ def test_play_sticks_after_each_turning_point():
     wide = run('g_sensitivity', {'gy': gy}, 20.0, amp=np.deg2rad(9.5))
     assert np.ptp((wide[4][1] - wide[3])[wide[0] >= 1.25]) > 0.1 * gy
     assert np.degrees(np.arcsin(h / G0)) == pytest.approx(8.8, abs=0.05)
-    assert z_ratio('g_sensitivity') == pytest.approx(1.0, abs=0.01)
+    assert period_z_ratio(SWING, 'g_sensitivity') == pytest.approx(1.0, abs=0.01)
 
 
 def test_segmented_dac_is_an_odd_kinked_random_walk():
@@ -156,7 +145,7 @@ def test_segmented_dac_is_an_odd_kinked_random_walk():
     assert np.allclose((out[1] - x)[k], (out[1] - x)[5000 - k], rtol=1e-6, atol=1e-15)
     assert int(np.sum(np.arange(1, n) * seg < AMP * W)) == 8         # kinks under the peak
     assert int(np.sum(np.arange(1, n) * seg < 2 * AMP * W)) == 17
-    assert z_ratio('scale_factor_nonlinearity') == pytest.approx(1.1, abs=0.02)
+    assert period_z_ratio(SWING, 'scale_factor_nonlinearity') == pytest.approx(1.1, abs=0.02)
 
 
 def test_bootstrap_droops_through_each_positive_half_swing():
@@ -189,7 +178,7 @@ def test_bootstrap_droops_through_each_positive_half_swing():
         assert beta * top == pytest.approx(lo, abs=0.005)
     steady = SWING.droop(np.full(3000, 0.2), 1e-3)                 # a steady positive rate
     assert np.allclose(steady, 1 - np.exp(-0.2 * np.arange(1, 3001) * 1e-3 / SWING.DROOP_Q))
-    assert z_ratio('scale_factor_asymmetry') == pytest.approx(2.0, abs=0.03)
+    assert period_z_ratio(SWING, 'scale_factor_asymmetry') == pytest.approx(2.0, abs=0.03)
 
 
 def test_sample_and_hold_rotation_slips_at_random():
@@ -235,7 +224,7 @@ def test_sample_and_hold_rotation_slips_at_random():
         want = 2 * np.trapezoid(SWING.slot_psd(grid, slot, 1000.0), grid)
         assert got == pytest.approx(want, rel=0.1), (lo, hi)
     assert np.mean(values * (-1) ** np.arange(4)) ** 2 / np.mean(values ** 2) == 0.8   # 500 Hz
-    assert z_ratio('timestamp_jitter') == pytest.approx(1.66, abs=0.03)
+    assert period_z_ratio(SWING, 'timestamp_jitter') == pytest.approx(1.66, abs=0.03)
 
 
 def test_smudge_confines_the_cyclic_error_to_a_stretch():
@@ -271,7 +260,7 @@ def test_smudge_confines_the_cyclic_error_to_a_stretch():
     assert np.allclose(enc - SWING.SPOT_PHI,
                        a * np.sin(2 * SWING.SPOT_LINES * SWING.SPOT_PHI + SWING.SPOT_PHASE))
     assert 2 * np.pi / SWING.SPOT_LINES * 180 / np.pi * 3600 == pytest.approx(518.4, abs=0.1)
-    assert z_ratio('encoder_cyclic_error') == pytest.approx(0.78, abs=0.02)
+    assert period_z_ratio(SWING, 'encoder_cyclic_error') == pytest.approx(0.78, abs=0.02)
 
 
 def test_swing_harness_finds_set_ai():

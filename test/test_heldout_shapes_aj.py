@@ -5,7 +5,7 @@
 import bench_script
 
 from heldout_common import AMP, G0, lines, swing_runner, W
-from heldout_common import rng, swing_set_tests
+from heldout_common import period_z_ratio, rng, S_N, solved_levels_test, swing_set_tests
 
 import numpy as np
 
@@ -16,27 +16,16 @@ from scipy import signal, stats
 SWING = bench_script.load('validate_diagnosis_swing_heldout_aj')
 SETS = bench_script.load('heldout_sets')
 SHAPES = SWING.shapes(1000.0)
-S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)     # the preset gyro's per-sample noise
 OFF = {'time_delay': {'d': 0.0}, 'g_sensitivity': {'gy': 0.0},
        'scale_factor_nonlinearity': {'k2': 0.0}, 'scale_factor_asymmetry': {'a': 0.0},
        'timestamp_jitter': {'sigma': 0.0}, 'encoder_cyclic_error': {'a': 0.0}}
 run = swing_runner(SHAPES)
 
 
-def z_ratio(name, level=2):
-    """Return the z of a level at the 2.5 s period over that at 5 s."""
-    p = SHAPES[name][1][level]
-    return SWING.detectability(name, p, period_s=2.5) / SWING.detectability(name, p)
-
-
 (test_set_covers_the_catalogue_with_reproducible_generators, test_edge_is_at_z4,
  test_off_levels_leave_the_run_unchanged) = swing_set_tests(SWING, OFF)
 
-
-@pytest.mark.parametrize('name', sorted(SWING.KEY))
-def test_levels_are_the_solved_ones(name):
-    """Check the literal levels against ``levels`` (z = 25, 100, 4)."""
-    assert SWING.levels([name])[name] == SHAPES[name][1]
+test_levels_are_the_solved_ones = solved_levels_test(SWING)
 
 
 def test_flushes_make_the_stamps_late_intermittently():
@@ -77,7 +66,7 @@ def test_flushes_make_the_stamps_late_intermittently():
         rise = np.flatnonzero(np.diff(gate.astype(int)) > 0)
         firsts.append(t[rise[0] + 1] if rise.size else 0.0)
     assert stats.kstest(np.array(firsts) / 11.3, 'uniform').pvalue > 1e-3
-    assert z_ratio('time_delay') == pytest.approx(4.0, rel=0.01)
+    assert period_z_ratio(SWING, 'time_delay') == pytest.approx(4.0, rel=0.01)
 
 
 def test_still_gated_reference_holds_through_the_motion():
@@ -111,7 +100,7 @@ def test_still_gated_reference_holds_through_the_motion():
     wide = run('g_sensitivity', {'gy': gy}, 10.0, amp=np.deg2rad(2.4))
     assert np.ptp(wide[4][1] - wide[3]) > 0.1 * gy
     assert np.degrees(0.05 / W) == pytest.approx(2.28, abs=0.01)
-    assert z_ratio('g_sensitivity') == pytest.approx(1.057, abs=0.01)
+    assert period_z_ratio(SWING, 'g_sensitivity') == pytest.approx(1.057, abs=0.01)
 
 
 def test_chopped_front_end_carries_the_quadratic_to_nyquist():
@@ -138,7 +127,7 @@ def test_chopped_front_end_carries_the_quadratic_to_nyquist():
     assert spec[freq < 400].sum() < 1e-12 * spec.sum()
     assert np.mean(err ** 2) == pytest.approx(3 / 8 * k2 ** 2 * (AMP * W) ** 4, rel=1e-3)
     assert k2 * AMP * W == pytest.approx(6.8e-3, rel=0.01)           # docstring: 0.68 %
-    assert z_ratio('scale_factor_nonlinearity') == pytest.approx(4.0, rel=0.01)
+    assert period_z_ratio(SWING, 'scale_factor_nonlinearity') == pytest.approx(4.0, rel=0.01)
 
 
 def test_forming_half_fades_with_negative_travel():
@@ -163,7 +152,7 @@ def test_forming_half_fades_with_negative_travel():
         if period == 5.0:
             assert env[-1] == pytest.approx(0.043, abs=0.001)            # docstring
         assert np.all(np.diff(env) <= 0)
-    assert z_ratio('scale_factor_asymmetry') == pytest.approx(1.74, abs=0.02)
+    assert period_z_ratio(SWING, 'scale_factor_asymmetry') == pytest.approx(1.74, abs=0.02)
 
 
 def test_self_timed_daq_walks_between_syncs():
@@ -209,7 +198,7 @@ def test_self_timed_daq_walks_between_syncs():
         grid = np.linspace(lo, hi, 20001)
         want = 2 * np.trapezoid(SWING.walk_psd(grid, sigma, 1000.0), grid)
         assert np.sum(pxx[band]) * (fw[1] - fw[0]) == pytest.approx(want, rel=0.1), (lo, hi)
-    assert z_ratio('timestamp_jitter') == pytest.approx(2.67, abs=0.03)
+    assert period_z_ratio(SWING, 'timestamp_jitter') == pytest.approx(2.67, abs=0.03)
 
 
 def test_speed_dropped_correction_gates_the_cyclic_error():
@@ -249,7 +238,7 @@ def test_speed_dropped_correction_gates_the_cyclic_error():
                                             rng(0), a=a)[3]
     assert np.all(enc == 0.1)                                       # none at rest
     assert 2 * np.pi / 4096 * 180 / np.pi * 3600 == pytest.approx(316.4, abs=0.1)
-    assert z_ratio('encoder_cyclic_error') == pytest.approx(1.05, abs=0.02)
+    assert period_z_ratio(SWING, 'encoder_cyclic_error') == pytest.approx(1.05, abs=0.02)
 
 
 def test_swing_harness_finds_set_aj():
