@@ -131,6 +131,9 @@ def test_diagnose_swing_two_periods_and_a_holdout_write_the_contract(tmp_path):
     assert all(r['twin_scale_factor_error'] == pooled for r in recs)
     lo, hi = sorted(r['kalman_scale_factor_error'] for r in recs)
     assert lo <= pooled <= hi
+    # A delay leaves the rates' Nyquist band alone: each run screened, none flagged.
+    assert all(r['rate_nyquist']['tested'] and not r['rate_nyquist']['flagged'] for r in recs)
+    assert all(r['rate_nyquist']['dof'] == 5 for r in recs) and 'warnings' not in d
     # The withheld run: the model fitted on the other two shrinks its gap.
     h = d['holdout']
     assert h['final_gap'] < 0.6 * h['baseline_gap']

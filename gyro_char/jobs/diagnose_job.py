@@ -184,6 +184,7 @@ def run_swing(args, console: Console) -> List[dict]:
     from dataclasses import replace
 
     from gyro_char.diagnosis import engine as diagnose, swing as diag_swing
+    from gyro_char.diagnosis.swing_nyquist import record_screen, screen_warning
     from gyro_char.report.diagnosis_plot import plot_diagnosis
 
     check = check_repeats(args)
@@ -208,6 +209,11 @@ def run_swing(args, console: Console) -> List[dict]:
     if swing_method(args) == 'expected' and check:
         out['posterior_predictive'] = posterior_predictive(problem, diag, check, args.seed)
     out['per_record'] = per_record(args.inputs, bases)
+    for i, ((imu, enc, _), b, rec) in enumerate(zip(records, bases, out['per_record'])):
+        rec['rate_nyquist'] = record_screen(imu, enc, b)
+        warn = screen_warning(i + 1, rec['rate_nyquist'])
+        if warn:
+            out.setdefault('warnings', []).append(warn)
     if hold is not None:
         out['holdout'] = swing_holdout_check(diag, hold, bases, args)
     os.makedirs(args.out, exist_ok=True)
