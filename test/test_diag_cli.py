@@ -139,6 +139,7 @@ def test_diagnose_swing_two_periods_and_a_holdout_write_the_contract(tmp_path):
     assert h['final_gap'] < 0.6 * h['baseline_gap']
     assert h['baseline_gap'] > h['null_gap_q95'] > h['final_gap']
     assert [e['name'] for e in h['effects']] == ['time_delay']
+    assert h['record']['rate_nyquist']['tested'] and not h['record']['rate_nyquist']['flagged']
     for png in ('diagnosis_gyro_x.png', 'diagnosis_gyro_x_record2.png'):
         assert (out / png).stat().st_size > 10_000
 

@@ -1,8 +1,12 @@
 """The swing Nyquist screen: chi-square on clean runs, the size of known alternating errors."""
+import json
+
 import bench_script
+from gyro_char.cli import main
 from gyro_char.diagnosis.swing_nyquist import BLOCK, MIN_BLOCKS, nyquist_screen, screen_warning
 from gyro_char.diagnosis.swing_obs import residuals
-from gyro_char.records import ENCODER_CHANNEL
+from gyro_char.io.bag_write import write_bag
+from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim.config import BenchConfig, load
 from gyro_char.sim.simulator import simulate_swing
 import numpy as np
@@ -36,7 +40,7 @@ def test_clean_runs_follow_chi2_on_5_dof_and_do_not_warn():
     white = cfg.noise['gyro_x']['N'] * np.sqrt(1000.0)
     out = [nyquist_screen(*clean_run(seed)[:3]) for seed in range(6)]
     assert all(s['tested'] and s['dof'] == 5 and not s['flagged'] for s in out)
-    assert all(screen_warning(1, s) is None for s in out)
+    assert all(screen_warning('record 1', s) is None for s in out)
     assert 1.1 < np.mean([s['chi2'] for s in out]) < 8.9          # 5 +- 3 sd of a mean of 6
     # The noise level at Nyquist is the white gyro noise's (per sample), from block means.
     assert np.median([s['noise_rad_s'] for s in out]) == pytest.approx(white, rel=0.12)
@@ -52,7 +56,8 @@ def test_an_alternating_quadratic_term_is_found_at_its_size(k2, phase):
     # The fitted component's rms against the truth, within 4 sd of its noise.
     sd = s['noise_rad_s'] * np.sqrt(5.0 / x.size)
     assert abs(s['rms_rad_s'] - truth) < 4 * sd + 0.02 * truth
-    assert 'Nyquist' in screen_warning(2, s) and screen_warning(2, s).startswith('record 2')
+    warning = screen_warning('record 2', s)
+    assert 'Nyquist' in warning and warning.startswith('record 2: ')
 
 
 def test_dropped_samples_keep_the_parity_and_smooth_or_stamp_errors_do_not_warn():
@@ -77,7 +82,7 @@ def test_short_or_non_finite_input_is_not_tested():
     bad = x.copy()
     bad[100] = np.nan
     assert nyquist_screen(t, bad, th) == {'tested': False, 'reason': 'non-finite gyro samples'}
-    assert screen_warning(1, short) is None
+    assert screen_warning('record 1', short) is None
 
 
 def test_the_bench_screen_flags_set_ajs_chopped_term_and_not_its_delay():
@@ -88,3 +93,27 @@ def test_the_bench_screen_flags_set_ajs_chopped_term_and_not_its_delay():
     delay = bench.screen([('time_delay', 1)], 11, shapes, 60.0)
     assert chop['flagged'] and chop['rms_rad_s'] == pytest.approx(1.84e-3, rel=0.1)
     assert delay['tested'] and not delay['flagged']
+
+
+def test_diagnose_warns_of_a_chopped_term_on_a_real_bag(tmp_path, capsys):
+    # A 60 s, 200 Hz swing run with a chopped k2 w^2, written as a real bag and diagnosed.
+    cfg = BenchConfig.from_preset('adis16405', {'gyro': {'rate_hz': 200.0}})
+    run = simulate_swing(cfg, duration=60.0, seed=3)
+    imu, enc = run.imu, run.encoder
+    res = residuals(imu.t, imu.channels['gyro_x'], enc.t, enc.channels[ENCODER_CHANNEL],
+                    cfg.stand.period_s)
+    err = np.zeros(imu.t.size)
+    err[res.idx_g] = chopped(imu.t[res.idx_g], res.th, res.peak_rate)
+    channels = dict(imu.channels, gyro_x=imu.channels['gyro_x'] + err)
+    bag = str(tmp_path / 'chopped')
+    write_bag(bag, Recording(imu.t, channels, imu.source), enc)
+    out = tmp_path / 'out'
+    assert main(['diagnose', '--kind', 'swing', bag, '--out', str(out), '--repeats', '4',
+                 '--quiet']) == 0
+    d = json.loads((out / 'diagnosis.json').read_text())
+    screen = d['per_record'][0]['rate_nyquist']
+    assert screen['flagged'] and screen['rms_rad_s'] == pytest.approx(
+        np.sqrt(np.mean(err[res.idx_g] ** 2)), rel=0.15)
+    assert [w for w in d['warnings'] if w.startswith('record 1: ') and 'Nyquist' in w]
+    assert 'WARNING: record 1: the gyro rate carries a component at its Nyquist' in (
+        capsys.readouterr().out)

@@ -94,11 +94,11 @@ def record_screen(imu: Recording, encoder: Recording, base) -> dict:
                           res.th)
 
 
-def screen_warning(record: int, screen: dict) -> Optional[str]:
-    """Return the warning of a flagged screen (``record`` counted from 1), else None."""
+def screen_warning(label: str, screen: dict) -> Optional[str]:
+    """Return the warning of a flagged screen of the run ``label`` ('record 1'), else None."""
     if not screen.get('flagged'):
         return None
-    return (f'record {record}: the gyro rate carries a component at its Nyquist frequency '
+    return (f'{label}: the gyro rate carries a component at its Nyquist frequency '
             f'locked to the swing (rms {screen["rms_rad_s"]:.3g} rad/s, chi2 '
             f'{screen["chi2"]:.1f} on {screen["dof"]} dof, p {screen["p_value"]:.1e}): an error '
             'alternating sample by sample (a chopped, ping-pong or time-interleaved front '

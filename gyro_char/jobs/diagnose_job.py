@@ -211,11 +211,14 @@ def run_swing(args, console: Console) -> List[dict]:
     out['per_record'] = per_record(args.inputs, bases)
     for i, ((imu, enc, _), b, rec) in enumerate(zip(records, bases, out['per_record'])):
         rec['rate_nyquist'] = record_screen(imu, enc, b)
-        warn = screen_warning(i + 1, rec['rate_nyquist'])
+        warn = screen_warning(f'record {i + 1}', rec['rate_nyquist'])
         if warn:
             out.setdefault('warnings', []).append(warn)
     if hold is not None:
         out['holdout'] = swing_holdout_check(diag, hold, bases, args)
+        warn = screen_warning('held-out record', out['holdout']['record']['rate_nyquist'])
+        if warn:
+            out.setdefault('warnings', []).append(warn)
     os.makedirs(args.out, exist_ok=True)
     pngs = []
     for i, b in enumerate(bases):
@@ -272,6 +275,7 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
     from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing
     from gyro_char.diagnosis.engine import excess_gap
     from gyro_char.diagnosis.fit import GapObjective
+    from gyro_char.diagnosis.swing_nyquist import record_screen
 
     imu, enc, period = hold
     problem = diag_swing.swing_records_problem(
@@ -290,7 +294,8 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
             'final_excess': excess_gap(final.gap, null),
             'effects': [{'name': n, 'params': p} for n, p in diag.model],
             'record': {'period_s': b.period_s, 'amplitude_rad': b.amplitude,
-                       'kalman_scale_factor_error': b.record_scale_factor_error},
+                       'kalman_scale_factor_error': b.record_scale_factor_error,
+                       'rate_nyquist': record_screen(imu, enc, b)},
             'note': 'effect parameters and the pooled scale-factor error fixed from the fit; '
                     'bias, drift and noise levels of the record are refitted'}
 
