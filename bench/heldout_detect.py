@@ -147,6 +147,11 @@ def period_lines(err, w: float, kmin: int = 1) -> float:
     return float(2 * np.linalg.norm(c[kmin:61]))
 
 
+def step_of(t) -> float:
+    """Return the median sample interval of the stamps ``t``."""
+    return float(np.median(np.diff(t)))
+
+
 def swing_scales(period_s: float, duration: float):
     """
     Return the swing sets' yardsticks from the adis16405 preset: (N, amplitude, encoder, w, s).

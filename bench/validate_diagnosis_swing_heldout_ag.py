@@ -78,7 +78,7 @@ power-on head errors a of 0.043, 0.27 and 1.08 arcsec on the 864 arcsec pitch.
 from functools import lru_cache
 
 from heldout_detect import encoder_floor, matched_z, period_lines, print_levels
-from heldout_detect import solved_levels, stamp_z, swing_scales
+from heldout_detect import solved_levels, stamp_z, step_of, swing_scales
 
 import numpy as np
 
@@ -103,11 +103,6 @@ KEY = {'time_delay': 'd', 'g_sensitivity': 'gy', 'scale_factor_nonlinearity': 'e
 TARGETS = (25.0, 100.0, 4.0)            # z of the weak, strong and edge levels
 GUESS = {'time_delay': 1e-3, 'g_sensitivity': 1e-4, 'scale_factor_nonlinearity': 1e-2,
          'scale_factor_asymmetry': 1e-3, 'timestamp_jitter': 1e-5, 'encoder_cyclic_error': 1e-6}
-
-
-def step_of(t) -> float:
-    """Return the median sample interval of the stamps ``t``."""
-    return float(np.median(np.diff(t)))
 
 
 def playout(ell, step: float) -> np.ndarray:

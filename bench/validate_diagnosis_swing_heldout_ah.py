@@ -84,7 +84,7 @@ the preset's own 20 us); static detent deflections a of 0.033, 0.21 and 0.83 arc
 from functools import lru_cache
 
 from heldout_detect import encoder_floor, matched_z, period_lines, print_levels
-from heldout_detect import solved_levels, stamp_z, swing_scales
+from heldout_detect import solved_levels, stamp_z, step_of, swing_scales
 
 import numpy as np
 
@@ -111,11 +111,6 @@ TARGETS = (25.0, 100.0, 4.0)            # z of the weak, strong and edge levels
 GUESS = {'time_delay': 4e-4, 'g_sensitivity': 1e-4, 'scale_factor_nonlinearity': 1e-2,
          'scale_factor_asymmetry': 1e-3, 'timestamp_jitter': 3e-5, 'encoder_cyclic_error': 1e-6}
 SLOPE = {'time_delay': 6.0, 'timestamp_jitter': 2.0}    # first guess of d ln z / d ln x (else 1)
-
-
-def step_of(t) -> float:
-    """Return the median sample interval of the stamps ``t``."""
-    return float(np.median(np.diff(t)))
 
 
 def loss(phi) -> np.ndarray:

@@ -80,7 +80,7 @@ play 1.0x, smudge 0.78x). Physical scale: oscillator errors eps of 17.4 (edge), 
 from functools import lru_cache
 
 from heldout_detect import encoder_floor, matched_z, print_levels, solved_levels
-from heldout_detect import stamp_z, swing_scales
+from heldout_detect import stamp_z, step_of, swing_scales
 
 import numpy as np
 
@@ -104,11 +104,6 @@ TARGETS = (25.0, 100.0, 4.0)            # z of the weak, strong and edge levels
 GUESS = {'time_delay': 1e-4, 'g_sensitivity': 1e-4, 'scale_factor_nonlinearity': 1e-3,
          'scale_factor_asymmetry': 1e-3, 'timestamp_jitter': 3e-6, 'encoder_cyclic_error': 1e-6}
 SLOPE = {'timestamp_jitter': 2.0}       # first guess of d ln z / d ln x (else 1)
-
-
-def step_of(t) -> float:
-    """Return the median sample interval of the stamps ``t``."""
-    return float(np.median(np.diff(t)))
 
 
 def resync_anchors(t, rng) -> np.ndarray:

@@ -76,7 +76,7 @@ g_y of 2.92e-5, 1.83e-4 and 7.31e-4 rad/s/(m/s^2) (0.016, 0.10 and 0.41 deg/s/g)
 arcsec period of the 4th harmonic.
 """
 from heldout_detect import encoder_floor, matched_z, print_levels, solved_levels
-from heldout_detect import stamp_z, swing_scales
+from heldout_detect import stamp_z, step_of, swing_scales
 
 import numpy as np
 
@@ -99,11 +99,6 @@ TARGETS = (25.0, 100.0, 4.0)            # z of the weak, strong and edge levels
 GUESS = {'time_delay': 1e-3, 'g_sensitivity': 1e-4, 'scale_factor_nonlinearity': 1e-3,
          'scale_factor_asymmetry': 1e-3, 'timestamp_jitter': 1e-5, 'encoder_cyclic_error': 1e-6}
 SLOPE = {'timestamp_jitter': 2.0}       # first guess of d ln z / d ln x (else 1)
-
-
-def step_of(t) -> float:
-    """Return the median sample interval of the stamps ``t``."""
-    return float(np.median(np.diff(t)))
 
 
 def flush_gate(t, rng) -> np.ndarray:
