@@ -16,9 +16,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from gyro_char.diagnosis.swing_nyquist import nyquist_screen  # noqa: E402
-from gyro_char.diagnosis.swing_obs import residuals  # noqa: E402
-from gyro_char.records import ENCODER_CHANNEL  # noqa: E402
+from gyro_char.diagnosis.swing_nyquist import record_screen  # noqa: E402
 
 import validate_diagnosis_swing as harness  # noqa: E402
 
@@ -26,9 +24,7 @@ import validate_diagnosis_swing as harness  # noqa: E402
 def screen(truth, seed, shape_set, duration) -> dict:
     """Return the screen of one harness record of ``truth`` ([(name, level)]) and ``seed``."""
     imu, enc = harness.make_record(truth, seed, duration=duration, shape_set=shape_set)
-    res = residuals(imu.t, imu.channels['gyro_x'], enc.t, enc.channels[ENCODER_CHANNEL],
-                    harness.PERIOD)
-    return nyquist_screen(imu.t[res.idx_g], imu.channels['gyro_x'][res.idx_g], res.th)
+    return record_screen(imu, enc, 'x', harness.PERIOD)
 
 
 def main(argv=None) -> int:

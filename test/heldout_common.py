@@ -19,9 +19,9 @@ AMP, PERIOD = np.deg2rad(20.0), 5.0
 W = 2 * np.pi / PERIOD
 G0 = 9.80665
 INC = N_ARW * np.sqrt(DT)       # the static records' white-noise angle step per sample
-# sd of a fitted rate-residual sine on a 900 s swing run of the preset's gyro
 # the preset gyro's per-sample noise at 1 kHz (its ARW, 1.89 deg/sqrt(h))
 S_N = 1.890 * np.pi / 180.0 / 60.0 * np.sqrt(1000.0)
+# sd of a fitted rate-residual sine on a 900 s swing run of the preset's gyro
 S_LINE = BenchConfig.from_preset('adis16405').noise['gyro_x']['N'] * np.sqrt(2 / 900.0)
 STATIC_NAMES = ['internal_lowpass', 'vibration', 'temperature_drift', 'bias_instability',
                 'rate_random_walk', 'gauss_markov', 'quantization', 'resonance']

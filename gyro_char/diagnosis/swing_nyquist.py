@@ -6,17 +6,17 @@ Nyquist frequency is zero ((x_k + x_(k+1)) / 2 of an alternating sequence cancel
 that alternates sign from sample to sample with a size that follows the swing (the residue of
 a chopped or ping-pong front end, the skew of two time-interleaved converters) thus leaves
 the angle, the swing calibration and the gap untouched, while a user who filters or
-integrates the rates otherwise gets it. The screen
-shifts the rate's Nyquist band to 0 Hz, y_k = (-1)^k (x_k - (x_(k-1) + x_(k+1)) / 2) / 2 (unit
-gain at Nyquist, the smooth swing rate out), fits y on the swing's shapes 1, cos θ, sin θ,
-cos 2θ, sin 2θ (a size following w², |w| or w projects onto them), and scores the fit
-against the residual's own level at 0 Hz (block means): chi-square on 5 degrees of freedom
-for white or coloured noise alike. Not a catalogue effect and not in the gap: a warning.
+integrates the rates otherwise gets it. The screen shifts the rate's Nyquist band to 0 Hz,
+y_k = (-1)^k (x_k - (x_(k-1) + x_(k+1)) / 2) / 2 (unit gain at Nyquist, the smooth swing rate
+out), fits y on the swing's shapes 1, cos θ, sin θ, cos 2θ, sin 2θ (a size following w², |w|
+or w projects onto them), and scores the fit against the residual's own level at 0 Hz (block
+means): chi-square on 5 degrees of freedom for white or coloured noise alike. Not a catalogue
+effect and not in the gap: a warning.
 """
 from typing import Optional
 
-from gyro_char.diagnosis.swing_twin import record_residuals
-from gyro_char.records import Recording
+from gyro_char.diagnosis.swing_obs import residuals
+from gyro_char.records import ENCODER_CHANNEL, Recording
 import numpy as np
 from scipy import stats
 
@@ -87,11 +87,11 @@ def nyquist_screen(t: np.ndarray, rate: np.ndarray, th: np.ndarray) -> dict:
             'noise_rad_s': float(np.sqrt(s0))}
 
 
-def record_screen(imu: Recording, encoder: Recording, base) -> dict:
-    """Return the screen of a swing record's gyro axis (``base``: its ``SwingBaseline``)."""
-    res = record_residuals(imu, encoder, base)
-    return nyquist_screen(imu.t[res.idx_g], imu.channels[f'gyro_{base.axis}'][res.idx_g],
-                          res.th)
+def record_screen(imu: Recording, encoder: Recording, axis: str, period_s: float) -> dict:
+    """Return the screen of a swing record's gyro ``axis`` (swing phase from its encoder)."""
+    rate = imu.channels[f'gyro_{axis}']
+    res = residuals(imu.t, rate, encoder.t, encoder.channels[ENCODER_CHANNEL], period_s)
+    return nyquist_screen(imu.t[res.idx_g], rate[res.idx_g], res.th)
 
 
 def screen_warning(label: str, screen: dict) -> Optional[str]:
@@ -101,7 +101,6 @@ def screen_warning(label: str, screen: dict) -> Optional[str]:
     return (f'{label}: the gyro rate carries a component at its Nyquist frequency '
             f'locked to the swing (rms {screen["rms_rad_s"]:.3g} rad/s, chi2 '
             f'{screen["chi2"]:.1f} on {screen["dof"]} dof, p {screen["p_value"]:.1e}): an error '
-            'alternating sample by sample (a chopped, ping-pong or time-interleaved front '
-            'end). The integrated '
-            'angle, hence the calibration and the gap, cannot see it; no catalogue effect '
-            'models it; see "per_record" rate_nyquist')
+            'alternating sample by sample (a chopped, ping-pong or time-interleaved front end). '
+            'The integrated angle, hence the calibration and the gap, cannot see it; no '
+            'catalogue effect models it; see "per_record" rate_nyquist')

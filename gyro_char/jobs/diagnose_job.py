@@ -209,16 +209,16 @@ def run_swing(args, console: Console) -> List[dict]:
     if swing_method(args) == 'expected' and check:
         out['posterior_predictive'] = posterior_predictive(problem, diag, check, args.seed)
     out['per_record'] = per_record(args.inputs, bases)
+    screens = []
     for i, ((imu, enc, _), b, rec) in enumerate(zip(records, bases, out['per_record'])):
-        rec['rate_nyquist'] = record_screen(imu, enc, b)
-        warn = screen_warning(f'record {i + 1}', rec['rate_nyquist'])
-        if warn:
-            out.setdefault('warnings', []).append(warn)
+        rec['rate_nyquist'] = record_screen(imu, enc, b.axis, b.period_s)
+        screens.append((f'record {i + 1}', rec['rate_nyquist']))
     if hold is not None:
         out['holdout'] = swing_holdout_check(diag, hold, bases, args)
-        warn = screen_warning('held-out record', out['holdout']['record']['rate_nyquist'])
-        if warn:
-            out.setdefault('warnings', []).append(warn)
+        screens.append(('held-out record', out['holdout']['record']['rate_nyquist']))
+    warnings = [w for w in (screen_warning(*s) for s in screens) if w]
+    if warnings:
+        out['warnings'] = out.get('warnings', []) + warnings
     os.makedirs(args.out, exist_ok=True)
     pngs = []
     for i, b in enumerate(bases):
@@ -295,7 +295,7 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
             'effects': [{'name': n, 'params': p} for n, p in diag.model],
             'record': {'period_s': b.period_s, 'amplitude_rad': b.amplitude,
                        'kalman_scale_factor_error': b.record_scale_factor_error,
-                       'rate_nyquist': record_screen(imu, enc, b)},
+                       'rate_nyquist': record_screen(imu, enc, b.axis, b.period_s)},
             'note': 'effect parameters and the pooled scale-factor error fixed from the fit; '
                     'bias, drift and noise levels of the record are refitted'}
 
