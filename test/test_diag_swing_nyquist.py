@@ -4,7 +4,7 @@ import json
 import bench_script
 from gyro_char.cli import main
 from gyro_char.diagnosis.swing_nyquist import BLOCK, MIN_BLOCKS, nyquist_screen, screen_warning
-from gyro_char.diagnosis.swing_obs import residuals
+from gyro_char.diagnosis.swing_residuals import residuals
 from gyro_char.io.bag_write import write_bag
 from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim.config import BenchConfig, load

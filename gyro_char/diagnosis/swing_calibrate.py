@@ -10,7 +10,8 @@ from dataclasses import replace
 from typing import Callable, Dict, List, Sequence, Tuple
 
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
-from gyro_char.diagnosis.swing_obs import solve_columns, unlocked_psd
+from gyro_char.diagnosis.swing_obs import unlocked_psd
+from gyro_char.diagnosis.swing_residuals import solve_columns
 from gyro_char.diagnosis.swing_twin import (
     encoder_white_sigma, record_observables, record_residuals, simulate_twin, twin_config)
 from gyro_char.records import ENCODER_CHANNEL, Recording

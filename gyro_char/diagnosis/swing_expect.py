@@ -33,14 +33,15 @@ noise-only run on a grid of lags (``EffectParts._lag``). What this leaves out:
 the cross terms' extra spread (the pseudo-twins' spread is the baseline's) and the effects'
 interaction with quantization; ``--check`` simulates the selected model's twins in full.
 """
-from typing import Callable, Dict, List, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
 from gyro_char.diagnosis.swing_gains import (
     clean_config, lag_gain, limit_gain, limits_of, noise_config, span)
-from gyro_char.diagnosis.swing_obs import finish, raw_parts, residuals
+from gyro_char.diagnosis.swing_obs import finish, raw_parts
 from gyro_char.diagnosis.swing_rate_noise import (
     gate_grid, gate_weights, PLAIN_OFF, rate_noise_gain, split, unit_level)
+from gyro_char.diagnosis.swing_residuals import common_samples, residuals
 from gyro_char.records import ENCODER_CHANNEL
 from gyro_char.sim import simulator
 from gyro_char.sim.chain import JITTER_CLIP
@@ -71,6 +72,7 @@ class EffectParts:
         self.config, self.scale = config, scale
         self.cache: Dict[Tuple[int, str], dict] = {}
         self.clean: Dict[int, tuple] = {}
+        self.own: Dict[tuple, dict] = {}   # raw parts of each clean run, keyed like ``clean``
 
     def _run(self, i: int, effects: list, span_s: float = 0.0, noisy: bool = False,
              full: bool = False, gain: float = 1.0):
@@ -98,27 +100,36 @@ class EffectParts:
                 self.clean[(i, span_s, full)] = self._run(i, [], span_s, full=full)
             res0, s0 = self.clean[(i, span_s, full)]
             res, s = self._run(i, effects, span_s, full=full, gain=gain)
-            part = self._difference(i, res0, res, cross=full or not noise)
+            part = self._difference(i, res0, res, cross=full or not noise,
+                                    own=(i, span_s, full))
             part['scale'] = s - s0
             if noise:
                 part = self._as_noise(i, part, span_s)
             self.cache[key] = part
         return self.cache[key]
 
-    def _difference(self, i: int, res0, res, cross: bool = False) -> dict:
+    def _difference(self, i: int, res0, res, cross: bool = False,
+                    own: Optional[tuple] = None) -> dict:
         # Sample by sample: the same sample numbers of both runs (a stamp shift may drop
         # an edge sample from one of them). ``cross``: the parts are those of the run with
         # the effect minus those without, so the quadratic ones keep the cross term of D
         # with the motion's own deterministic residual A (interpolation of the gyro angle at
         # the encoder stamps), which every twin shares: E|A + D + N|^2 - E|A + N|^2 (the
-        # linear ones are D's either way: the residual fit is a fixed projection).
-        cg, ig0, ig = np.intersect1d(res0.idx_g, res.idx_g, return_indices=True)
-        ce, ie0, ie = np.intersect1d(res0.idx_e, res.idx_e, return_indices=True)
-        geo = res0.take(ig0, ie0)
+        # linear ones are D's either way: the residual fit is a fixed projection). ``own``:
+        # the key of ``res0`` in ``clean``, whose parts are kept when all its samples are used.
+        ig0, ig = common_samples(res0.idx_g, res.idx_g)
+        ie0, ie = common_samples(res0.idx_e, res.idx_e)
+        whole = ig0.size == res0.r.size and ie0.size == res0.r_e.size
+        geo = res0 if whole else res0.take(ig0, ie0)
         if not cross:
             return raw_parts(geo, self.ranges[i], res.r[ig] - geo.r, res.r_e[ie] - geo.r_e)
-        with_fx, without = (raw_parts(geo, self.ranges[i], res.r[ig], res.r_e[ie]),
-                            raw_parts(geo, self.ranges[i]))
+        with_fx = raw_parts(geo, self.ranges[i], res.r[ig], res.r_e[ie])
+        if whole and own is not None:
+            if own not in self.own:
+                self.own[own] = raw_parts(geo, self.ranges[i])
+            without = self.own[own]
+        else:
+            without = raw_parts(geo, self.ranges[i])
         return {**with_fx, **{q: with_fx[q] - without[q] for q in LINEAR + QUADRATIC
                               if q in with_fx}}
 

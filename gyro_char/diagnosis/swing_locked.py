@@ -22,7 +22,7 @@ repeat. The diagnosis scores the two apart:
   beyond harmonic ``HIGH`` up to ``LOCKED_TOP`` of the sample rate, where a bin still holds
   it (sharp turning points, staircases, a dead band).
 """
-from typing import Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 from scipy import signal
@@ -32,45 +32,88 @@ LOCKED_BANDS = 4   # bands of locked power beyond HIGH, log-spaced up to LOCKED_
 LOCKED_TOP = 0.02  # of the sample rate: a one-sample phase bin holds 99.9 % of a line there
 
 
-def high_harmonics(th: np.ndarray, r: np.ndarray) -> np.ndarray:
+def harmonic_basis(th: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """
+    Return e^iθ and, per k = 4..``HIGH``, Σ sin² kθ, Σ cos² kθ and Σ sin kθ cos kθ (rows).
+
+    sin² = (1 - cos 2kθ) / 2, cos² = (1 + cos 2kθ) / 2, sin cos = sin 2kθ / 2.
+    """
+    z1 = np.exp(1j * th)
+    z2 = z1 * z1
+    zk = z2 ** 3
+    sums = np.empty((HIGH - 3, 3))
+    for j in range(HIGH - 3):
+        zk = zk * z2
+        c2, s2 = float(np.sum(zk.real)), float(np.sum(zk.imag))
+        sums[j] = 0.5 * (th.size - c2), 0.5 * (th.size + c2), 0.5 * s2
+    return z1, sums
+
+
+def high_harmonics(th: np.ndarray, r: np.ndarray,
+                   basis: Optional[Tuple[np.ndarray, np.ndarray]] = None) -> np.ndarray:
     """
     Return the sin kθ and cos kθ coefficients of ``r`` for k = 4..``HIGH`` (sin, cos, ...).
 
-    Least squares on each pair alone (its own 2 x 2 normal equations): over a record of many
+    Least squares on each pair alone (its own 2 x 2 normal equations; ``basis``: the
+    ``harmonic_basis`` of ``th``, when several ``r`` share it): over a record of many
     periods the pairs are orthogonal to each other and to the lower harmonics and trends to
     about one over the number of periods, and whatever leaks is the same linear map on
     record and twins. The powers of e^iθ are built by repeated products (no trigonometry).
     """
-    z1 = np.exp(1j * th)
+    z1, sums = harmonic_basis(th) if basis is None else basis
     zk = z1 ** 3
     out = np.empty(2 * (HIGH - 3))
     for j in range(HIGH - 3):
         zk = zk * z1
-        s, c = zk.imag, zk.real
-        ss, cc, sc = (float(np.einsum('i,i->', s, s)), float(np.einsum('i,i->', c, c)),
-                      float(np.einsum('i,i->', s, c)))
-        ys, yc = float(np.einsum('i,i->', s, r)), float(np.einsum('i,i->', c, r))
+        ss, cc, sc = sums[j]
+        ys, yc = (float(np.einsum('i,i->', zk.imag, r)),
+                  float(np.einsum('i,i->', zk.real, r)))
         det = ss * cc - sc * sc
         out[2 * j] = (cc * ys - sc * yc) / det if det > 0 else 0.0
         out[2 * j + 1] = (ss * yc - sc * ys) / det if det > 0 else 0.0
     return out
 
 
-def wave(th: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+def wave(th: np.ndarray, low: np.ndarray, high: np.ndarray,
+         z1: Optional[np.ndarray] = None) -> np.ndarray:
     """
     Return the harmonics 1..``HIGH`` evaluated at the phases ``th``.
 
     ``low``: the sin and cos coefficients of θ, 2θ and 3θ; ``high``: those of 4θ..16θ
-    (``high_harmonics``).
+    (``high_harmonics``). Clenshaw's recurrence b_k = a_k + 2 cos θ b_(k+1) - b_(k+2) on the
+    sine and cosine series (three real passes a harmonic, no complex powers); ``z1``: e^iθ,
+    when known.
     """
     coef = np.r_[low, high].reshape(-1, 2)             # (sin, cos) of k = 1..HIGH
-    z1 = np.exp(1j * th)
-    zk = np.ones_like(z1)
-    out = np.zeros(th.size)
-    for s_k, c_k in coef:
-        zk = zk * z1
-        out += s_k * zk.imag + c_k * zk.real
-    return out
+    z1 = np.exp(1j * th) if z1 is None else z1
+    x = 2.0 * z1.real
+    bs, bs2, bc, bc2 = (np.zeros(th.size) for _ in range(4))
+    tmp = np.empty(th.size)
+    for s_k, c_k in coef[::-1]:
+        np.multiply(x, bs, out=tmp)
+        tmp -= bs2
+        tmp += s_k
+        bs2, bs, tmp = bs, tmp, bs2
+        np.multiply(x, bc, out=tmp)
+        tmp -= bc2
+        tmp += c_k
+        bc2, bc, tmp = bc, tmp, bc2
+    # Σ s_k sin kθ = b_1 sin θ; Σ c_k cos kθ = b_1 cos θ - b_2.
+    return bs * z1.imag + 0.5 * x * bc - bc2
+
+
+def phase_bins(th: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """Return each sample's phase bin (one bin a sample of the period) and the bins' counts."""
+    step = float(np.median(np.diff(th))) if th.size > 1 else 1.0
+    per = max(int(round(2.0 * np.pi / max(step, 1e-12))), 1)
+    k = np.minimum((np.mod(th, 2.0 * np.pi) / (2.0 * np.pi) * per).astype(int), per - 1)
+    return k, np.maximum(np.bincount(k, minlength=per), 1)
+
+
+def bin_mean(x: np.ndarray, bins: Tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """Return the mean of ``x`` in each of its samples' ``phase_bins``."""
+    k, count = bins
+    return np.bincount(k, x, minlength=count.size) / count
 
 
 def phase_mean(th: np.ndarray, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
@@ -79,11 +122,8 @@ def phase_mean(th: np.ndarray, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
 
     ``th`` are the phases of the samples of ``x``; the bin count is the period in samples.
     """
-    step = float(np.median(np.diff(th))) if th.size > 1 else 1.0
-    per = max(int(round(2.0 * np.pi / max(step, 1e-12))), 1)
-    k = np.minimum((np.mod(th, 2.0 * np.pi) / (2.0 * np.pi) * per).astype(int), per - 1)
-    mean = np.bincount(k, x, minlength=per) / np.maximum(np.bincount(k, minlength=per), 1)
-    return mean, k
+    bins = phase_bins(th)
+    return bin_mean(x, bins), bins[0]
 
 
 def locked_edges(f0: float, dt: float) -> np.ndarray:

@@ -15,7 +15,7 @@ effect and not in the gap: a warning.
 """
 from typing import Optional
 
-from gyro_char.diagnosis.swing_obs import residuals
+from gyro_char.diagnosis.swing_residuals import residuals
 from gyro_char.records import ENCODER_CHANNEL, Recording
 import numpy as np
 from scipy import stats

@@ -53,12 +53,14 @@ residual the encoder's own errors show in at full encoder rate (``encoder_residu
 Whole-record components rather than per-window ones: a constant effect's z grows with the
 record length instead of being spread over windows; the twins' repeats give the scatter.
 """
-from dataclasses import dataclass
-from typing import List, Optional, Tuple
+import functools
+from typing import Optional, Tuple
 
 from gyro_char.diagnosis.swing_locked import (
-    band_psd, HIGH, high_harmonics, locked_bands, locked_edges, phase_mean, split_rate, wave)
-from gyro_char.swing.align import integrate
+    band_psd, bin_mean, harmonic_basis, HIGH, high_harmonics, locked_bands, locked_edges,
+    phase_bins, split_rate, wave)
+from gyro_char.diagnosis.swing_residuals import (
+    column_normal, Residuals, residuals, solve_columns)
 import numpy as np
 
 PSD_BINS = 10
@@ -82,21 +84,6 @@ class SwingObs(dict):
     """Observable blocks of one record, plus the unscored ``line_peaks`` (see module doc)."""
 
     line_peaks: np.ndarray = np.array([])
-
-
-def solve_columns(cols: List[np.ndarray], y: np.ndarray) -> np.ndarray:
-    """
-    Return the least-squares coefficients of ``y`` on the columns ``cols`` (a few, long).
-
-    Normal equations with einsum (a threaded BLAS lstsq is slow on a busy 2-core machine);
-    columns are scaled to unit rms so that the small system stays well conditioned.
-    """
-    a = np.array(cols)
-    s = np.sqrt(np.einsum('ij,ij->i', a, a) / y.size)
-    s[s == 0] = 1.0
-    a = a / s[:, None]
-    coef = np.linalg.solve(np.einsum('ik,jk->ij', a, a), np.einsum('ik,k->i', a, y))
-    return coef / s
 
 
 def layout(n_psd: int, dt: float, period_s: float) -> dict:
@@ -130,12 +117,19 @@ UNITS = {'quadrature': 'Hz', 'harmonic_2f': 'Hz', 'harmonic_3f': 'Hz',
 def highpass(x: np.ndarray, n: int) -> np.ndarray:
     """``x`` minus its centred moving mean over ``n`` samples (shorter at the ends)."""
     c = np.concatenate(([0.0], np.cumsum(x)))
-    i = np.arange(x.size)
-    lo, hi = np.maximum(i - n // 2, 0), np.minimum(i + n // 2 + 1, x.size)
-    return x - (c[hi] - c[lo]) / (hi - lo)
+    lo, hi, width = _window(x.size, n)
+    return x - (c[hi] - c[lo]) / width
 
 
-def line_spectrum(phi: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+@functools.lru_cache(maxsize=8)
+def _window(size: int, n: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    i = np.arange(size)
+    lo, hi = np.maximum(i - n // 2, 0), np.minimum(i + n // 2 + 1, size)
+    return lo, hi, (hi - lo).astype(float)
+
+
+def line_spectrum(phi: np.ndarray, r: np.ndarray,
+                  grid: Optional[tuple] = None) -> Tuple[np.ndarray, np.ndarray]:
     """
     Amplitude spectrum (rad) of ``r`` against the angle ``phi``: line counts, amplitudes.
 
@@ -148,17 +142,24 @@ def line_spectrum(phi: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarra
     at the top band edge (phase spread within a bin). Lines above π / (peak rate x sample
     interval), 7100 for a 1 kHz encoder on a 0.44 rad/s swing, alias where the swing is
     fastest: a line L also shows at about 2π / (peak rate x interval) - L (some 20 %).
+    ``grid``: ``angle_grid(phi)``, when several ``r`` share the angles.
     """
+    j, w, wsum, nfft, lines = angle_grid(phi) if grid is None else grid
+    s = np.bincount(j, r * w, minlength=nfft // 2)
+    amp = 2.0 * np.abs(np.fft.rfft(s, nfft)) / wsum
+    return lines, amp
+
+
+def angle_grid(phi: np.ndarray) -> tuple:
+    """``line_spectrum``'s angle bins, weights, their sum, FFT size and line counts."""
     span = max(float(phi.max() - phi.min()), ANGLE_BIN)
     j = ((phi - phi.min()) / ANGLE_BIN).astype(np.intp)
     n = int(j.max()) + 1
     step = np.abs(np.gradient(phi))
     w = step * (1.0 - np.cos(TWO_PI * (phi - phi.min()) / span))
-    s = np.bincount(j, r * w, minlength=n)
     nfft = 1 << int(np.ceil(np.log2(2 * n)))
-    amp = 2.0 * np.abs(np.fft.rfft(s, nfft)) / max(float(w.sum()), 1e-300)
-    lines = TWO_PI * np.arange(amp.size) / (nfft * ANGLE_BIN)
-    return lines, amp
+    lines = TWO_PI * np.arange(nfft // 2 + 1) / (nfft * ANGLE_BIN)
+    return j, w, max(float(w.sum()), 1e-300), nfft, lines
 
 
 def band_peaks(lines: np.ndarray, amp: np.ndarray,
@@ -178,25 +179,32 @@ def band_peaks(lines: np.ndarray, amp: np.ndarray,
     return peaks, where
 
 
-def rate_bins(th: np.ndarray, d: np.ndarray, peak_rate: float) -> Tuple[np.ndarray, ...]:
-    """
-    Return per |cos th| bin the increments' mean square, mean squared rate, split and lag 1.
-
-    The split: the mean square of ``d`` where cos th < 0 less where cos th > 0 (``rate_sign``);
-    lag 1: the mean of d_j d_(j+1) (``rate_acf``).
-    """
+def rate_bin_index(th: np.ndarray) -> dict:
+    """``rate_bins``' geometry: each sample's |cos th| bin, the bins' counts, their cos² th."""
     nb = len(RATE_EDGES) - 1
     c = np.cos(th)
     k = np.clip(np.digitize(np.abs(c), RATE_EDGES) - 1, 0, nb - 1)
     cnt = np.maximum(np.bincount(k, minlength=nb), 1)
+    sides = [(m, k[m], np.maximum(np.bincount(k[m], minlength=nb), 1)) for m in (c < 0, c >= 0)]
+    return {'k': k, 'count': cnt, 'sides': sides,
+            'cos2': np.bincount(k, c * c, minlength=nb) / cnt,
+            'pairs': np.maximum(np.bincount(k[:-1], minlength=nb), 1)}
+
+
+def rate_bins(index: dict, d: np.ndarray, peak_rate: float) -> Tuple[np.ndarray, ...]:
+    """
+    Return per |cos th| bin the increments' mean square, mean squared rate, split and lag 1.
+
+    The split: the mean square of ``d`` where cos th < 0 less where cos th > 0 (``rate_sign``);
+    lag 1: the mean of d_j d_(j+1) (``rate_acf``). ``index``: ``rate_bin_index`` of the
+    increments' phases th.
+    """
+    nb, k = len(RATE_EDGES) - 1, index['k']
     d2 = d * d
-    neg = c < 0
-    side = [np.bincount(k[m], d2[m], minlength=nb) / np.maximum(
-        np.bincount(k[m], minlength=nb), 1) for m in (neg, ~neg)]
-    pairs = np.maximum(np.bincount(k[:-1], minlength=nb), 1)
-    return (np.bincount(k, d2, minlength=nb) / cnt,
-            peak_rate * peak_rate * np.bincount(k, c * c, minlength=nb) / cnt,
-            side[0] - side[1], np.bincount(k[:-1], d[:-1] * d[1:], minlength=nb) / pairs)
+    side = [np.bincount(km, d2[m], minlength=nb) / cm for m, km, cm in index['sides']]
+    return (np.bincount(k, d2, minlength=nb) / index['count'],
+            peak_rate * peak_rate * index['cos2'], side[0] - side[1],
+            np.bincount(k[:-1], d[:-1] * d[1:], minlength=nb) / index['pairs'])
 
 
 def rate_locked_of(ms: np.ndarray, w2: np.ndarray) -> np.ndarray:
@@ -215,7 +223,7 @@ def rate_locked_of(ms: np.ndarray, w2: np.ndarray) -> np.ndarray:
 
 def rate_locked(th: np.ndarray, d: np.ndarray, peak_rate: float) -> np.ndarray:
     """Apparent stamp-error variance per |cos th| bin of the increments ``d`` (asinh, µs²)."""
-    return rate_locked_of(*rate_bins(th, d, peak_rate)[:2])
+    return rate_locked_of(*rate_bins(rate_bin_index(th), d, peak_rate)[:2])
 
 
 def rate_sign_of(msd: np.ndarray, ms: np.ndarray) -> np.ndarray:
@@ -257,63 +265,6 @@ def increment_acf(r: np.ndarray, lags: int = ACF_LAGS) -> np.ndarray:
     return c[1:] / max(c[0], 1e-300)
 
 
-@dataclass
-class Residuals:
-    """
-    The residual streams of one record and the swing geometry they are decomposed on.
-
-    ``r`` at the gyro stamps (``idx_g``: their sample numbers in the input), ``r_e`` at the
-    encoder stamps (``idx_e``); ``th`` / ``th_e`` the swing phase there, ``ts`` the normalised
-    time of the trend columns, ``phi`` the encoder angle. ``scale`` is the fitted (1 + Δρ).
-    """
-
-    r: np.ndarray
-    idx_g: np.ndarray
-    th: np.ndarray
-    ts: np.ndarray
-    dt: float
-    r_e: np.ndarray
-    idx_e: np.ndarray
-    th_e: np.ndarray
-    phi: np.ndarray
-    dt_e: float
-    peak_rate: float
-
-    def take(self, keep_g: np.ndarray, keep_e: np.ndarray) -> 'Residuals':
-        """Return the geometry restricted to the gyro and encoder samples ``keep_g``/``keep_e``."""
-        return Residuals(self.r[keep_g], self.idx_g[keep_g], self.th[keep_g], self.ts[keep_g],
-                         self.dt, self.r_e[keep_e], self.idx_e[keep_e], self.th_e[keep_e],
-                         self.phi[keep_e], self.dt_e, self.peak_rate)
-
-
-def residuals(t_g: np.ndarray, rate: np.ndarray, t_e: np.ndarray, enc: np.ndarray,
-              period_s: float) -> Residuals:
-    """Return the residual streams of a record (gyro rad/s at ``t_g``, encoder rad at ``t_e``)."""
-    lo, hi = max(t_g[0], t_e[0]), min(t_g[-1], t_e[-1])
-    m = (t_g >= lo) & (t_g <= hi)
-    tau = t_g[m] - lo
-    ang = integrate(tau, rate[m])
-    e = np.interp(tau, t_e - lo, enc)
-    w = 2.0 * np.pi / period_s
-    span = max(tau[-1], 1e-9)
-    ts = tau / span
-    one = np.ones_like(tau)
-    ce = solve_columns([np.sin(w * tau), np.cos(w * tau), one, ts, ts * ts], e)
-    psi = float(np.arctan2(ce[1], ce[0]))
-    k = solve_columns([e, one, ts, ts * ts], ang)
-    r = ang - k[0] * e - (k[1] + k[2] * ts + k[3] * ts * ts)
-    # The same fit on the encoder stamps inside the gyro span.
-    me = (t_e >= lo + tau[0]) & (t_e <= lo + tau[-1])
-    tau_e, phi = t_e[me] - lo, enc[me]
-    tse = tau_e / span
-    r_e = np.interp(tau_e, tau, ang) - k[0] * phi - (k[1] + k[2] * tse + k[3] * tse * tse)
-    th_e = w * tau_e + psi
-    return Residuals(r, np.flatnonzero(m), w * tau + psi, ts, float(np.median(np.diff(tau))),
-                     r_e, np.flatnonzero(me), th_e, phi,
-                     max(float(np.median(np.diff(tau_e))), 1e-9),
-                     w * float(np.hypot(ce[0], ce[1])))
-
-
 def unlocked_psd(res: Residuals, ranges: dict) -> np.ndarray:
     """
     ``residual_psd`` of the residual rate less its mean at each phase of the swing.
@@ -342,23 +293,27 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     r = res.r if r is None else r
     r_e = res.r_e if r_e is None else r_e
     th, ts = res.th, res.ts
-    cols = [np.sin(th), np.cos(th), np.sin(2 * th), np.cos(2 * th), np.sin(3 * th),
-            np.cos(3 * th), np.ones_like(ts), ts, ts * ts]
-    h = solve_columns(cols, r)
+    basis = res.geometry('harmonics', lambda: harmonic_basis(th))
+    z1, z2 = basis[0], basis[0] * basis[0]
+    z3 = z2 * z1
+    cols = [z1.imag, z1.real, z2.imag, z2.real, z3.imag, z3.real, np.ones_like(ts), ts, ts * ts]
+    h = solve_columns(cols, r, res.geometry('columns', lambda: column_normal(np.array(cols))))
     low = r - sum(c * col for c, col in zip(h, cols))
-    high = high_harmonics(th, low)
+    high = high_harmonics(th, low, basis)
     # What the harmonic blocks score is not the noise blocks' (``swing_locked``): they see the
     # residuals less the harmonics 1..16, at each stream's own phases.
-    r_u = low - wave(th, np.zeros(6), high)
-    r_eu = r_e - wave(res.th_e, h[:6], high)
+    r_u = low - wave(th, np.zeros(6), high, z1)
+    r_eu = r_e - wave(res.th_e, h[:6], high, res.geometry('z1_e', lambda: np.exp(1j * res.th_e)))
     rate_u = np.diff(r_u) / res.dt
     psd = band_psd(rate_u, res.dt, ranges['residual_psd'])
-    mean = phase_mean(0.5 * (th[1:] + th[:-1]), rate_u)[0]
+    mid = res.geometry('phase_bins', lambda: phase_bins(0.5 * (th[1:] + th[:-1])))
+    mean = bin_mean(rate_u, mid)
     f0 = ranges['quadrature'][0][0]
     # High-passed residuals (about 0.2 s): what an effect leaves at the swing's harmonics -
     # large, deterministic, and the harmonic blocks' business - must not pass for noise here.
     hp_e = highpass(r_e, int(round(HP_SECONDS / res.dt_e)))
-    lines, amp = line_spectrum(res.phi, hp_e)
+    grid = res.geometry('angles', lambda: angle_grid(res.phi))
+    lines, amp = line_spectrum(res.phi, hp_e, grid)
     peaks, where = band_peaks(lines, amp)
     band = np.clip(np.digitize(lines, LINE_EDGES) - 1, 0, LINE_EDGES.size - 2)
     inside = (lines >= LINE_EDGES[0]) & (lines < LINE_EDGES[-1])
@@ -369,8 +324,8 @@ def raw_parts(res: Residuals, ranges: dict, r: Optional[np.ndarray] = None,
     # of 3 on clean records): a constant, so that they score nothing.
     above = LINE_EDGES[1:] > np.pi / max(res.peak_rate * res.dt_e, 1e-300)
     hp_eu = highpass(r_eu, int(round(HP_SECONDS / res.dt_e)))
-    ms, w2, msd, mp = rate_bins(0.5 * (res.th_e[1:] + res.th_e[:-1]), np.diff(hp_eu),
-                                res.peak_rate)
+    ix = res.geometry('rate_bins', lambda: rate_bin_index(0.5 * (res.th_e[1:] + res.th_e[:-1])))
+    ms, w2, msd, mp = rate_bins(ix, np.diff(hp_eu), res.peak_rate)
     acf = increment_sums(highpass(r_u, int(round(HP_SECONDS / res.dt))))
     # h[0] (sin θ) is sin 2θ and 3θ leaking through the trend columns: not a block (module doc).
     return {'harm': np.r_[h[1:6], high], 'psd': psd, 'locked': locked_bands(mean, f0, res.dt),

@@ -3,13 +3,15 @@ The swing twins: the bench simulator configured as a fitted baseline, and what i
 
 A twin is the paper's swing model at the baseline's numbers plus candidate effects; a run
 (record or twin) is read through ``record_residuals`` / ``record_observables`` (the residual
-streams and observables of ``swing_obs``) and ``record_scale`` (its least-squares scale).
+streams of ``swing_residuals``, observables of ``swing_obs``) and ``record_scale`` (its
+least-squares scale).
 """
 from typing import Sequence
 
 from gyro_char.diagnosis.swing_baseline import PRESET, SwingBaseline
 from gyro_char.diagnosis.swing_gains import twin_noise_gain
-from gyro_char.diagnosis.swing_obs import residuals, solve_columns, swing_observables
+from gyro_char.diagnosis.swing_obs import swing_observables
+from gyro_char.diagnosis.swing_residuals import residuals, solve_columns
 from gyro_char.diagnosis.twins import twin_effects
 from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim import simulator
@@ -79,7 +81,7 @@ def record_observables(imu: Recording, encoder: Recording, base: SwingBaseline,
 
 
 def record_residuals(imu: Recording, encoder: Recording, base: SwingBaseline):
-    """Return the residual streams (``swing_obs.Residuals``) of a run."""
+    """Return the residual streams (``swing_residuals.Residuals``) of a run."""
     return residuals(imu.t, imu.channels[f'gyro_{base.axis}'], encoder.t,
                      encoder.channels[ENCODER_CHANNEL], base.period_s)
 
