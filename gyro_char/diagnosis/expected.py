@@ -261,10 +261,14 @@ def acf_integrals(spec: ModelSpectrum, g: Grids, lags: int):
     """E r(0) of the detrended record and the variogram D(k), k = 1..lags (stochastic part)."""
     nu = spec.refine(g.nu_log)
     s = spec.one_sided(nu / g.dt) / g.dt
-    keep = g.g_detrend if nu.size == g.nu_log.size else _detrend_keep(nu * g.n)
-    r0 = _trapz(s * keep, nu)
     k = np.arange(1, lags + 1)
-    dk = 4.0 * (np.sin(np.pi * np.outer(k, nu)) ** 2 @ (s * _trapz_weights(nu)))  # 2(1 - cos)
+    if nu.size == g.nu_log.size:
+        keep, (sin2, weights) = g.g_detrend, _acf_kernels(g.n, g.dt, lags)['log']
+    else:
+        keep, sin2, weights = (_detrend_keep(nu * g.n), np.sin(np.pi * np.outer(k, nu)) ** 2,
+                               _trapz_weights(nu))
+    r0 = _trapz(s * keep, nu)
+    dk = 4.0 * (sin2 @ (s * weights))  # 2(1 - cos)
     if spec.lines:
         f0, power = (np.array(v, dtype=np.float64) for v in zip(*spec.lines))
         x = f0 * g.dt
@@ -275,6 +279,31 @@ def acf_integrals(spec: ModelSpectrum, g: Grids, lags: int):
 
 # DFT bins of the record summed one by one in ``acf_moments`` (beyond, integrals).
 ACF_BINS = 1024
+
+
+@lru_cache(maxsize=8)
+def _acf_kernels(n: int, dt: float, lags: int) -> dict:
+    """
+    Return the autocorrelation's fixed kernels for ``grids(n, dt)`` (once per record shape).
+
+    ``log``: sin^2(pi k nu) and trapezoid weights on ``nu_log``; ``bins`` / ``tail``: the
+    frequencies (Hz) of ``acf_moments``' DFT bins and of its integral beyond them, with their
+    detrend share or trapezoid weights, 4 sin^2(pi k nu) and its square.
+    """
+    g = grids(n, dt)
+    k = np.arange(1, lags + 1, dtype=float)
+    j = np.arange(1, min(ACF_BINS, n // 2) + 1, dtype=float)
+    w = 4.0 * np.sin(np.pi * np.outer(k, j / n)) ** 2
+    nu = np.geomspace((ACF_BINS + 0.5) / n, 0.5, 2000)
+    w_tail = 4.0 * np.sin(np.pi * np.outer(k, nu)) ** 2
+    out = {'log': (np.sin(np.pi * np.outer(np.arange(1, lags + 1), g.nu_log)) ** 2,
+                   _trapz_weights(g.nu_log)),
+           'bins': (j / n / dt, _detrend_keep(j), w, w * w),
+           'tail': (nu / dt, _trapz_weights(nu), w_tail, w_tail * w_tail)}
+    for arrays in out.values():
+        for a in arrays:
+            a.flags.writeable = False
+    return out
 
 
 def acf_moments(spec: ModelSpectrum, g: Grids, lags: int, det: Deterministic = None):
@@ -295,16 +324,15 @@ def acf_moments(spec: ModelSpectrum, g: Grids, lags: int, det: Deterministic = N
     det0 = 0.0 if det is None else float(det.acov[0])
     detk = 0.0 if det is None else det.acov[1:lags + 1]
     mu0, mu_d = r0 + det0, dk + 2.0 * (det0 - detk)
-    j = np.arange(1, min(ACF_BINS, g.n // 2) + 1, dtype=float)
-    a = spec.one_sided(j / g.n / g.dt) / g.dt * _detrend_keep(j) / g.n
-    w = 4.0 * np.sin(np.pi * np.outer(k, j / g.n)) ** 2
+    kern = _acf_kernels(g.n, g.dt, lags)
+    f, keep, w, ww = kern['bins']
+    a = spec.one_sided(f) / g.dt * keep / g.n
     a2 = a * a
-    v0, v_d, c = float(a2.sum()), (w * w) @ a2, w @ a2
+    v0, v_d, c = float(a2.sum()), ww @ a2, w @ a2
     if g.n // 2 > ACF_BINS:
-        nu = np.geomspace((ACF_BINS + 0.5) / g.n, 0.5, 2000)
-        s2 = (spec.one_sided(nu / g.dt) / g.dt) ** 2 * _trapz_weights(nu) / g.n
-        w = 4.0 * np.sin(np.pi * np.outer(k, nu)) ** 2
-        v0, v_d, c = v0 + float(s2.sum()), v_d + (w * w) @ s2, c + w @ s2
+        f, weights, w, ww = kern['tail']
+        s2 = (spec.one_sided(f) / g.dt) ** 2 * weights / g.n
+        v0, v_d, c = v0 + float(s2.sum()), v_d + ww @ s2, c + w @ s2
     if spec.lines:                 # a line's bin: noise and line, a cross term 2 a P
         f0, power = (np.array(v, dtype=np.float64) for v in zip(*spec.lines))
         nu0 = f0 * g.dt

@@ -127,7 +127,7 @@ def fold(f, rate: float):
     return np.minimum(g, rate - g)
 
 
-_IMAGES: 'OrderedDict[tuple, list]' = OrderedDict()
+_IMAGES: 'OrderedDict[tuple, tuple]' = OrderedDict()
 _IMAGES_LOCK = threading.Lock()
 IMAGE_CACHE = 8         # grids whose images are kept (~10 MB each for the Allan grids)
 
@@ -219,13 +219,14 @@ class ModelSpectrum:
             out = out * interleaved_memory_gain2(f, self.memory, self.interleave, self.dt)
         return out
 
-    def images(self, f: np.ndarray) -> list:
+    def images(self, f: np.ndarray) -> tuple:
         """
         Per image r of the decimation: (sin^2(pi dt_i (f + r fs)), floored; |H|^2 there).
 
-        They depend on the grid and the filter only, not on the effects, so the last few
-        grids' are kept (keyed by the grid's bytes); the sines of all the images come from
-        one sine and cosine of the grid (x + pi r / D, by angle addition).
+        Also 4 sin^2(pi f dt) / dt, the output-rate white angle error's shape. They depend on
+        the grid and the filter only, not on the effects, so the last few grids' are kept
+        (keyed by the grid's bytes); the sines of all the images come from one sine and
+        cosine of the grid (x + pi r / D, by angle addition).
         """
         key = (self.taps, self.stages, self.decimation, self.dt, f.tobytes())
         with _IMAGES_LOCK:        # a Dask worker may run several diagnoses in threads
@@ -247,11 +248,13 @@ class ModelSpectrum:
             else:
                 h2 = np.ones_like(f)
             out.append((np.maximum(s * s, 1e-300), h2))
+        s_out = np.sin(np.pi * f * self.dt)
+        hit = (out, 4.0 * s_out * s_out / self.dt)
         with _IMAGES_LOCK:
-            _IMAGES[key] = out
+            _IMAGES[key] = hit
             while len(_IMAGES) > IMAGE_CACHE:
                 _IMAGES.popitem(last=False)
-        return out
+        return hit
 
     def one_sided(self, f, parts: Optional[Sequence[int]] = None) -> np.ndarray:
         """
@@ -275,15 +278,17 @@ class ModelSpectrum:
     def _unheld(self, f: np.ndarray, parts) -> np.ndarray:
         total = np.zeros_like(f)
         sel = range(len(self.internal)) if parts is None else parts
-        for s2, h2 in self.images(f):
+        images, angle_shape = self.images(f)
+        for s2, h2 in images:
             s = np.full_like(f, self.white_int)
             for i in sel:
                 s += self.internal[i](s2)
             total += h2 * s
         if self.filtered:
             total *= self.g2(f)
-        s_sin = np.sin(np.pi * f * self.dt)
-        total += self.output_white + self.angle_var * 4.0 * s_sin * s_sin / self.dt
+        total += self.output_white
+        if self.angle_var:
+            total += self.angle_var * angle_shape
         for part in self.framed:
             total += part(f)
         return 2.0 * total
