@@ -296,7 +296,7 @@ def _acf_kernels(n: int, dt: float, lags: int) -> dict:
     w = 4.0 * np.sin(np.pi * np.outer(k, j / n)) ** 2
     nu = np.geomspace((ACF_BINS + 0.5) / n, 0.5, 2000)
     w_tail = 4.0 * np.sin(np.pi * np.outer(k, nu)) ** 2
-    out = {'log': (np.sin(np.pi * np.outer(np.arange(1, lags + 1), g.nu_log)) ** 2,
+    out = {'log': (np.sin(np.pi * np.outer(k, g.nu_log)) ** 2,
                    _trapz_weights(g.nu_log)),
            'bins': (j / n / dt, _detrend_keep(j), w, w * w),
            'tail': (nu / dt, _trapz_weights(nu), w_tail, w_tail * w_tail)}

@@ -57,6 +57,20 @@ class SwingBaseline:
         return {k: {'value': float(getattr(self, k)), 'unit': u} for k, u in units.items()}
 
 
+def sample_numbers(t: np.ndarray) -> np.ndarray:
+    """
+    Return each stamp's sample number on the nominal grid, dropped samples counted.
+
+    An interval of about k median intervals is k samples (at least one); with no positive
+    median interval, one sample a stamp.
+    """
+    d = np.diff(np.asarray(t, dtype=np.float64))
+    med = float(np.median(d)) if d.size else 0.0
+    if not med > 0:
+        return np.arange(d.size + 1, dtype=np.float64)
+    return np.concatenate([[0.0], np.cumsum(np.maximum(np.round(d / med), 1.0))])
+
+
 def sample_interval(t: np.ndarray) -> float:
     """
     Return the mean interval of the stamps ``t``: their least-squares slope on the sample number.
@@ -64,17 +78,15 @@ def sample_interval(t: np.ndarray) -> float:
     Not the span over the count: that carries the two end stamps' jitter whole (10-20 us over
     a 15-min run at 1 kHz), and a twin whose gyro and encoder intervals differ by it drifts
     through a quarter of the interpolation phase; its residual's increment correlation moved
-    by 2.4 times its own scatter. The sample numbers count dropped samples (an interval of
-    about k medians is k samples).
+    by 2.4 times its own scatter. The sample numbers count dropped samples
+    (``sample_numbers``).
     """
     t = np.asarray(t, dtype=np.float64)
     if t.size < 3:
         return float(t[-1] - t[0]) / max(t.size - 1, 1)
-    d = np.diff(t)
-    med = float(np.median(d))
-    if not med > 0:
+    if not float(np.median(np.diff(t))) > 0:
         return float(t[-1] - t[0]) / (t.size - 1)
-    k = np.concatenate([[0.0], np.cumsum(np.maximum(np.round(d / med), 1.0))])
+    k = sample_numbers(t)
     k -= k.mean()
     return float(np.dot(k, t - t.mean()) / np.dot(k, k))
 

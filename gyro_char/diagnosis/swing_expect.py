@@ -33,7 +33,7 @@ noise-only run on a grid of lags (``EffectParts._lag``). What this leaves out:
 the cross terms' extra spread (the pseudo-twins' spread is the baseline's) and the effects'
 interaction with quantization; ``--check`` simulates the selected model's twins in full.
 """
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Sequence, Tuple
 
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
 from gyro_char.diagnosis.swing_gains import (
@@ -72,7 +72,6 @@ class EffectParts:
         self.config, self.scale = config, scale
         self.cache: Dict[Tuple[int, str], dict] = {}
         self.clean: Dict[int, tuple] = {}
-        self.own: Dict[tuple, dict] = {}   # raw parts of each clean run, keyed like ``clean``
 
     def _run(self, i: int, effects: list, span_s: float = 0.0, noisy: bool = False,
              full: bool = False, gain: float = 1.0):
@@ -100,23 +99,22 @@ class EffectParts:
                 self.clean[(i, span_s, full)] = self._run(i, [], span_s, full=full)
             res0, s0 = self.clean[(i, span_s, full)]
             res, s = self._run(i, effects, span_s, full=full, gain=gain)
-            part = self._difference(i, res0, res, cross=full or not noise,
-                                    own=(i, span_s, full))
+            part = self._difference(i, res0, res, cross=full or not noise)
             part['scale'] = s - s0
             if noise:
                 part = self._as_noise(i, part, span_s)
             self.cache[key] = part
         return self.cache[key]
 
-    def _difference(self, i: int, res0, res, cross: bool = False,
-                    own: Optional[tuple] = None) -> dict:
+    def _difference(self, i: int, res0, res, cross: bool = False) -> dict:
         # Sample by sample: the same sample numbers of both runs (a stamp shift may drop
         # an edge sample from one of them). ``cross``: the parts are those of the run with
         # the effect minus those without, so the quadratic ones keep the cross term of D
         # with the motion's own deterministic residual A (interpolation of the gyro angle at
         # the encoder stamps), which every twin shares: E|A + D + N|^2 - E|A + N|^2 (the
-        # linear ones are D's either way: the residual fit is a fixed projection). ``own``:
-        # the key of ``res0`` in ``clean``, whose parts are kept when all its samples are used.
+        # linear ones are D's either way: the residual fit is a fixed projection). The parts
+        # without the effect are kept on ``res0`` (a cached clean run) when all its samples
+        # are used.
         ig0, ig = common_samples(res0.idx_g, res.idx_g)
         ie0, ie = common_samples(res0.idx_e, res.idx_e)
         whole = ig0.size == res0.r.size and ie0.size == res0.r_e.size
@@ -124,12 +122,7 @@ class EffectParts:
         if not cross:
             return raw_parts(geo, self.ranges[i], res.r[ig] - geo.r, res.r_e[ie] - geo.r_e)
         with_fx = raw_parts(geo, self.ranges[i], res.r[ig], res.r_e[ie])
-        if whole and own is not None:
-            if own not in self.own:
-                self.own[own] = raw_parts(geo, self.ranges[i])
-            without = self.own[own]
-        else:
-            without = raw_parts(geo, self.ranges[i])
+        without = geo.geometry('own_parts', lambda: raw_parts(geo, self.ranges[i]))
         return {**with_fx, **{q: with_fx[q] - without[q] for q in LINEAR + QUADRATIC
                               if q in with_fx}}
 

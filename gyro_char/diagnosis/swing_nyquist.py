@@ -15,6 +15,7 @@ effect and not in the gap: a warning.
 """
 from typing import Optional
 
+from gyro_char.diagnosis.swing_baseline import sample_numbers
 from gyro_char.diagnosis.swing_residuals import residuals
 from gyro_char.records import ENCODER_CHANNEL, Recording
 import numpy as np
@@ -26,27 +27,16 @@ BLOCK = 1024             # samples a block of the noise level's estimate
 MIN_BLOCKS = 8
 
 
-def sample_index(t: np.ndarray) -> np.ndarray:
-    """
-    Return each sample's index on the nominal grid: gaps count their missing samples.
-
-    A stamp that jumps late with no sample lost reads as a loss and flips the parity from
-    there on: the screen loses power (the two stretches cancel), it does not raise a warning.
-    """
-    d = np.diff(np.asarray(t, float))
-    dt = float(np.median(d))
-    steps = np.maximum(np.rint(d / dt), 1).astype(np.int64)
-    return np.r_[0, np.cumsum(steps)]
-
-
 def demodulated(t: np.ndarray, rate: np.ndarray):
     """
     Return (kept, y): the rate's Nyquist band shifted to 0 Hz (module doc).
 
-    Only where both neighbours are one nominal step away; ``kept`` indexes the samples of
-    ``rate`` that y stands for.
+    Only where both neighbours are one nominal step away (``swing_baseline.sample_numbers``:
+    a lost sample does not flip the parity; a stamp that jumps late with none lost reads as a
+    loss and flips it from there on, which costs the screen power, not a false warning);
+    ``kept`` indexes the samples of ``rate`` that y stands for.
     """
-    k = sample_index(t)
+    k = sample_numbers(t).astype(np.int64)
     x = np.asarray(rate, float)
     mid = np.flatnonzero((np.diff(k)[:-1] == 1) & (np.diff(k)[1:] == 1)) + 1
     y = 0.5 * (x[mid] - 0.5 * (x[mid - 1] + x[mid + 1]))

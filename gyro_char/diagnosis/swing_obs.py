@@ -125,7 +125,10 @@ def highpass(x: np.ndarray, n: int) -> np.ndarray:
 def _window(size: int, n: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     i = np.arange(size)
     lo, hi = np.maximum(i - n // 2, 0), np.minimum(i + n // 2 + 1, size)
-    return lo, hi, (hi - lo).astype(float)
+    out = lo, hi, (hi - lo).astype(float)
+    for a in out:
+        a.flags.writeable = False     # shared by every caller of the cache
+    return out
 
 
 def line_spectrum(phi: np.ndarray, r: np.ndarray,

@@ -44,8 +44,8 @@ class Residuals:
 
     ``r`` at the gyro stamps (``idx_g``: their sample numbers in the input), ``r_e`` at the
     encoder stamps (``idx_e``); ``th`` / ``th_e`` the swing phase there, ``ts`` the normalised
-    time of the trend columns, ``phi`` the encoder angle. ``memo``: what the geometry alone
-    fixes, filled on first use (``geometry``).
+    time of the trend columns, ``phi`` the encoder angle. ``memo``: what the geometry (or the
+    run's own streams) alone fixes, filled on first use (``geometry``).
     """
 
     r: np.ndarray
@@ -68,7 +68,7 @@ class Residuals:
                          self.phi[keep_e], self.dt_e, self.peak_rate)
 
     def geometry(self, name: str, make: Callable):
-        """Return ``make()``, computed once: it must depend on the geometry alone."""
+        """Return ``make()``, computed once: it must depend on this run alone, not the caller."""
         if name not in self.memo:
             self.memo[name] = make()
         return self.memo[name]
