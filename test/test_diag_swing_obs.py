@@ -9,7 +9,10 @@ Records: the bench simulator's ADIS16405 swing (gyro 200 Hz, encoder 1 kHz, 60 s
 from gyro_char.diagnosis import (engine as diagnose, swing as diag_swing,
                                  swing_obs as diag_swing_obs)
 from gyro_char.diagnosis.fit import EffectSpace, Param
-from gyro_char.diagnosis.swing_spaces import harmonics_shown, line_start, with_lines
+from gyro_char.diagnosis.swing_baseline import fit_baseline
+from gyro_char.diagnosis.swing_spaces import (harmonics_shown, line_start, swing_spaces,
+                                              with_lines)
+from gyro_char.diagnosis.swing_speed_gate import with_speed_gate
 from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim import simulator
 from gyro_char.sim.config import BenchConfig
@@ -131,6 +134,22 @@ def test_harness_cyclic_error_peaks_at_1000_and_3000(clean):
     assert np.all(np.abs(o0['encoder_lines'] - _obs(*_record(seed=12))['encoder_lines']) < 0.4)
 
 
+def test_cyclic_error_space_holds_unshown_harmonics_at_zero_and_offers_a_speed_gate(clean):
+    imu, enc, o0 = clean
+    base = fit_baseline(imu, enc, PERIOD)
+    sp = next(s for s in swing_spaces(base) if s.name == 'encoder_cyclic_error')
+    started = with_lines(sp, [_obs(imu, _harness_cyclic(enc))], [o0])
+    assert {p.name for p in started.params} == {'a1', 'a3', 'lines'}
+    twin = {**started.fixed, **{p.name: 1e-6 for p in started.params}}
+    assert twin['a2'] == 0.0 and twin['a4'] == 0.0
+    (form,) = with_speed_gate([started], [base])[0].alternatives
+    gate = form.params[-1]
+    assert gate.name == 'gate_rads' and 0.0 < gate.lo < gate.hi < base.peak_rate
+    assert form.fixed == started.fixed and form.params[:-1] == started.params
+    # No line found (no line count searched): no gated form.
+    assert with_speed_gate([sp], [base])[0].alternatives == sp.alternatives
+
+
 def test_rate_locked_reads_encoder_stamp_jitter(clean):
     imu, enc, o0 = clean
     sigma = 6e-5
@@ -162,7 +181,8 @@ def test_blind_harness_cyclic_error_found_with_its_line_count(clean):
     # (with the first harmonic alone it kept a fifth: 114.5 -> 27.5 on a 15 min run).
     p = d.steps[0]['params']
     assert 2.5e-5 < p['a1'] < 1e-4 and 1e-5 < p['a3'] < 4e-5
-    assert 'a2' not in p and 'a4' not in p     # not shown as lines: not searched
+    # Not shown as lines: not searched, and held at 0 (not at the catalogue's a2 = 2e-6).
+    assert p['a2'] == 0.0 and p['a4'] == 0.0
     assert d.final_gap < 0.1 * d.baseline_gap
 
 

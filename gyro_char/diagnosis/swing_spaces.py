@@ -72,8 +72,11 @@ def swing_spaces(base: SwingBaseline) -> List[EffectSpace]:
         # an octave or two up: a third harmonic, clipped tracks' bumps four a line). Up to
         # 300 encoder noise sds (0.8 mrad on the preset, 3 % of a 256-line pitch; at 30 the
         # development set's strong 0.2 mrad error sat on the bound).
+        # The harmonics a record does not show are held at 0, not left to the catalogue's
+        # defaults (a2 = 2e-6 rad, which every twin carried until session 37).
         EffectSpace('encoder_cyclic_error', [
-            Param('a1', *cyclic), *(Param(name, *cyclic, off_at='lo') for name in HARMONICS)]),
+            Param('a1', *cyclic), *(Param(name, *cyclic, off_at='lo') for name in HARMONICS)],
+            fixed=dict.fromkeys(HARMONICS, 0.0)),
         # Both streams: an IMU stamp error alone leaves no first-order trace here (the gyro
         # angle and the encoder read at the same wrong stamp move together); an encoder
         # stamp error shows as residual angle noise rate x error. Down to 0.2 % of the
