@@ -74,6 +74,7 @@ from gyro_char.diagnosis import engine as diagnose, swing as diag_swing
 from gyro_char.errors import InputError
 from gyro_char.records import ENCODER_CHANNEL, Recording
 from gyro_char.sim import simulator
+from gyro_char.sim.chain import stand_angle_clean, stand_rate_clean
 from gyro_char.sim.config import BenchConfig
 import heldout_sets
 import numpy as np
@@ -89,11 +90,16 @@ HELD_OUT = 'validate_diagnosis_swing_heldout'
 
 
 def stand_of(cfg):
-    """``stand(t) -> (angle, rate)``: the stand model's swing (amplitude, period, phase)."""
+    """
+    ``stand(t) -> (angle, rate)``: the stand's true motion, its system noises left out.
+
+    The swing with the stand's offset and slow drift: an error locked to the disk (an
+    encoder's cyclic error) must follow the angle the encoder reads. Until session 37 this
+    was the swing alone; the preset's 2e-6 rad/s drift then slid a 4096-line error 7.4 rad
+    of phase against the disk over 15 minutes, smearing its line (set AJ's gated error).
+    """
     def stand(t):
-        w = 2 * np.pi / cfg.stand.period_s
-        arg = w * t + cfg.stand.phase
-        return cfg.stand.amplitude * np.sin(arg), cfg.stand.amplitude * w * np.cos(arg)
+        return stand_angle_clean(cfg.stand, t), stand_rate_clean(cfg.stand, t)
     return stand
 
 

@@ -102,3 +102,22 @@ def test_extra_clean_runs_have_their_own_seeds_and_clean_only_drops_the_shapes()
     full = list(h.cases('two', False, [11], clean_extra=1))
     assert [c for c in full if not c[1]] == [('two', [], 11), ('two', [], h.CLEAN_SEED0)]
     assert len(full) == 2 + sum(len(levels) for _, levels in h.SHAPES.values())
+
+
+def test_stand_is_the_motion_the_encoder_reads():
+    # The shapes' stand(t) is the simulator's stand without its system noises: offset and
+    # drift included, so an error locked to the disk stays locked over the whole run.
+    h = _harness()
+    from gyro_char.records import ENCODER_CHANNEL
+    from gyro_char.sim import simulator
+    from gyro_char.diagnosis.swing_gains import clean_config
+    from gyro_char.sim.config import BenchConfig
+    cfg = clean_config(BenchConfig.from_preset('adis16405'))
+    assert cfg.stand.offset != 0.0 and cfg.stand.drift_rate != 0.0
+    run = simulator.simulate_swing(cfg, duration=900.0, seed=3, channels=('gyro_x',))
+    t = run.encoder.t[::97]
+    angle, rate = h.stand_of(cfg)(t)
+    assert np.max(np.abs(angle - run.encoder.channels[ENCODER_CHANNEL][::97])) < 1e-9
+    t = run.encoder.t[:5000]
+    angle, rate = h.stand_of(cfg)(t)
+    assert np.allclose(np.gradient(angle, t), rate, atol=1e-5 * np.max(np.abs(rate)))

@@ -1,8 +1,10 @@
 # Optional catalogue shapes against closed forms: gauss_markov order 2 (two first-order stages
-# in cascade), quantization with dither (white angle error); the defaults are unchanged.
+# in cascade), quantization with dither (white angle error), a speed-gated encoder cyclic
+# error; the defaults are unchanged.
 from gyro_char.errors import InputError
 from gyro_char.sim import simulator
-from gyro_char.sim.config import BenchConfig
+from gyro_char.sim.chain import stand_angle_clean, stand_rate_clean
+from gyro_char.sim.config import BenchConfig, noiseless
 from gyro_char.sim.effects import EFFECTS
 from gyro_char.sim.effects.base import second_order_gm
 import numpy as np
@@ -73,3 +75,23 @@ def test_dithered_angle_quantization_makes_the_angle_error_white(dither, rms, la
     assert lag1[0] < np.corrcoef(err[:-1], err[1:])[0, 1] < lag1[1]
     with pytest.raises(InputError):
         EFFECTS['quantization'](dither=0.5)
+
+
+def test_encoder_cyclic_error_speed_gate_leaves_the_slow_passes_clean():
+    # gate_rads: the interpolation error only while the stand turns faster than the gate
+    # (the clean stand rate), exactly the ungated error there; 0 keeps the ungated form.
+    cfg = noiseless(BenchConfig.from_preset('adis16405'), keep_errors=False)
+    spec = 'encoder_cyclic_error:lines=1024,a1=4e-6,a2=0,p1=0.3'
+    runs = [simulator.simulate_swing(cfg, duration=10.0, seed=15, channels=['gyro_x'],
+                                     effects=[spec + gate]) for gate in ('', ',gate_rads=0.3')]
+    t = runs[0].encoder.t
+    phi, rate = stand_angle_clean(cfg.stand, t), stand_rate_clean(cfg.stand, t)
+    plain, gated = (r.encoder.channels['encoder'] - phi for r in runs)
+    fast = np.abs(rate) > 0.3
+    assert 0.3 < fast.mean() < 0.8
+    assert np.allclose(plain, 4e-6 * np.sin(1024 * phi + 0.3), atol=1e-12)
+    assert np.array_equal(gated[fast], plain[fast])
+    assert np.all(gated[~fast] == 0.0)
+    assert 'gate_rads' not in EFFECTS['encoder_cyclic_error']().describe()['params']
+    with pytest.raises(InputError, match='gate_rads'):
+        EFFECTS['encoder_cyclic_error'](gate_rads=-1.0)

@@ -31,6 +31,7 @@ from gyro_char.diagnosis.swing_rate_noise import with_rate_noise
 from gyro_char.diagnosis.swing_spaces import (
     probe_twins, signs, swing_spaces, unresolved_pairs, with_saturation, with_stamp_band,
     with_tables)
+from gyro_char.diagnosis.swing_speed_gate import with_speed_gate
 from gyro_char.diagnosis.swing_twin import (
     record_observables, record_residuals, record_scale, simulate_twin, twin_config)
 from gyro_char.diagnosis.twins import twin_effects
@@ -149,7 +150,7 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     spaces = [s for s in swing_spaces(longest) if s.name in names]
     probe = probe_twins(len(reals), simulate)
     spaces = with_tables(signs(spaces, reals, simulate, probe), bases, simulate, probe)
-    spaces = with_stamp_band(spaces, reals, ranges, probe, bases)
+    spaces = with_speed_gate(with_stamp_band(spaces, reals, ranges, probe, bases), bases)
     crests = [(float(np.nanmax(imu.channels[ch])), -float(np.nanmin(imu.channels[ch])))
               for imu, _, _ in records]
     spaces = with_rate_noise(with_saturation(spaces, crests, bases), bases)

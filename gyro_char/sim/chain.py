@@ -84,6 +84,12 @@ def stand_angle_clean(cfg: StandConfig, t: np.ndarray) -> np.ndarray:
             + 0.5 * cfg.drift_accel * t * t)
 
 
+def stand_rate_clean(cfg: StandConfig, t: np.ndarray) -> np.ndarray:
+    """Return the stand rate without the system noises (the derivative of the clean angle)."""
+    w = 2.0 * np.pi / cfg.period_s
+    return cfg.amplitude * w * np.cos(w * t + cfg.phase) + cfg.drift_rate + cfg.drift_accel * t
+
+
 def encoder_reading(cfg: EncoderConfig, angle: np.ndarray,
                     rng: np.random.Generator) -> np.ndarray:
     """phi_enc = [([phi / d1] d1 + dd1) / d2] d2 with [.] the integer part (floor)."""

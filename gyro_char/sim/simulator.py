@@ -31,7 +31,8 @@ from gyro_char.records import (ACCEL_CHANNELS, ENCODER_CHANNEL, GYRO_CHANNELS, I
                                Recording)
 from gyro_char.sim import noise_gen
 from gyro_char.sim.chain import (encoder_reading, quantize, quantizer_mean_error, sample_times,
-                                 specific_force, stand_angle_clean, stand_motion)
+                                 specific_force, stand_angle_clean, stand_motion,
+                                 stand_rate_clean)
 from gyro_char.sim.config import AXES, BenchConfig, load
 from gyro_char.sim.effects import build_effects, Effect, SimContext
 import numpy as np
@@ -106,6 +107,7 @@ def simulate_swing(config=None, *, duration: float = 900.0, seed: int = 0,
     ctx = SimContext(config=cfg, kind='swing', seed=int(seed), dt=1.0 / cfg.gyro.rate_hz,
                      axis=AXES.index(cfg.gyro.axis))
     ctx.stand_angle = lambda t: stand_angle_clean(cfg.stand, t)
+    ctx.stand_rate = lambda t: stand_rate_clean(cfg.stand, t)
     imu, truth_channels = _imu_chain(cfg, ctx, fx, n, _select(channels), quiet)
 
     ne = int(round(duration * cfg.encoder.rate_hz))

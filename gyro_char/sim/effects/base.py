@@ -69,6 +69,7 @@ class SimContext:
     specific_force: Optional[Array] = None  # 3 x n true specific force, m/s^2
     # Stand motion as functions of time (swing runs), for effects that need it elsewhere.
     stand_angle: Optional[Callable[[Array], Array]] = None
+    stand_rate: Optional[Callable[[Array], Array]] = None
     extras: Dict[str, Any] = field(default_factory=dict)
 
     @property

@@ -287,7 +287,10 @@ class EncoderCyclicError(Effect):
                'gives errors at 1x and 2x the signal frequency, distortion of the tracks '
                '(harmonics in the sine and cosine, clipped crests) at 3x and 4x: phi_read = '
                'phi + sum_k a_k sin(k L phi + p_k), k = 1..4. On a swing the error is a chirp '
-               'following the rate (frequency k L |phi_dot| / 2 pi).')
+               'following the rate (frequency k L |phi_dot| / 2 pi). gate_rads > 0: the error '
+               'is there only while the stand turns faster than gate_rads (an interpolator '
+               'whose correction table is skipped above a speed, or a tracking loop that '
+               'falls behind): a cyclic error in the fast part of each half-swing only.')
     PARAMS = {'lines': (2048.0, '1/rev', 'signal periods per revolution L'),
               'a1': (5.0e-6, 'rad', 'first-harmonic amplitude'),
               'a2': (2.0e-6, 'rad', 'second-harmonic amplitude'),
@@ -296,20 +299,28 @@ class EncoderCyclicError(Effect):
               'a3': (0.0, 'rad', 'third-harmonic amplitude'),
               'a4': (0.0, 'rad', 'fourth-harmonic amplitude'),
               'p3': (0.0, 'rad', 'third-harmonic phase'),
-              'p4': (0.0, 'rad', 'fourth-harmonic phase')}
+              'p4': (0.0, 'rad', 'fourth-harmonic phase'),
+              'gate_rads': (0.0, 'rad/s', 'the error only above this stand speed (0: always)')}
 
     def check(self):
         if self.lines <= 0:
             raise InputError('encoder_cyclic_error: lines must be > 0')
+        if self.gate_rads < 0:
+            raise InputError('encoder_cyclic_error: gate_rads must be >= 0')
 
     def describe(self):
-        return describe_without(self, 'a3', 'a4', 'p3', 'p4')
+        return describe_without(self, 'a3', 'a4', 'p3', 'p4', 'gate_rads')
 
     def encoder_angle(self, ctx, t, angle):
         x = self.lines * angle
+        on = 1.0
+        if self.gate_rads > 0.0:
+            if ctx.stand_rate is None:
+                raise InputError('encoder_cyclic_error: gate_rads needs a swing run')
+            on = np.abs(ctx.stand_rate(t)) > self.gate_rads
         out = angle
         for k in (1, 2, 3, 4):
             a = getattr(self, f'a{k}')
             if a != 0.0:
-                out = out + a * np.sin(k * x + getattr(self, f'p{k}'))
+                out = out + on * a * np.sin(k * x + getattr(self, f'p{k}'))
         return out
