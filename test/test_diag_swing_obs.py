@@ -150,6 +150,21 @@ def test_cyclic_error_space_holds_unshown_harmonics_at_zero_and_offers_a_speed_g
     assert with_speed_gate([sp], [base])[0].alternatives == sp.alternatives
 
 
+def test_no_search_form_leaves_a_catalogue_default_amplitude_on(clean):
+    # A parameter neither searched nor fixed takes the catalogue's default in every twin:
+    # only structural ones may (a process's order, a band's q unused without its centre,
+    # the stamped stream, a line count where no line is shown).
+    from gyro_char.sim.effects import EFFECTS
+    imu, enc, _ = clean
+    structural = {'order', 'q', 'stream', 'lines'}
+    for sp in diag_swing.swing_problem(imu, _harness_cyclic(enc), PERIOD).spaces:
+        for form in (sp,) + tuple(sp.alternatives):
+            given = {p.name for p in form.params} | set(form.fixed)
+            left = {k for k, (d, _, _) in EFFECTS[form.name].PARAMS.items()
+                    if d != 0.0 and k not in given}
+            assert left <= structural, (form.name, left)
+
+
 def test_rate_locked_reads_encoder_stamp_jitter(clean):
     imu, enc, o0 = clean
     sigma = 6e-5
