@@ -134,12 +134,16 @@ def test_diagnose_swing_two_periods_and_a_holdout_write_the_contract(tmp_path):
     # A delay leaves the rates' Nyquist band alone: each run screened, none flagged.
     assert all(r['rate_nyquist']['tested'] and not r['rate_nyquist']['flagged'] for r in recs)
     assert all(r['rate_nyquist']['dof'] == 5 for r in recs) and 'warnings' not in d
+    # Too short for the waveform screen's six segments of 12 periods: not tested, said why.
+    assert all(not r['waveform_drift']['tested'] and 'need' in r['waveform_drift']['reason']
+               for r in recs)
     # The withheld run: the model fitted on the other two shrinks its gap.
     h = d['holdout']
     assert h['final_gap'] < 0.6 * h['baseline_gap']
     assert h['baseline_gap'] > h['null_gap_q95'] > h['final_gap']
     assert [e['name'] for e in h['effects']] == ['time_delay']
     assert h['record']['rate_nyquist']['tested'] and not h['record']['rate_nyquist']['flagged']
+    assert 'reason' in h['record']['waveform_drift']
     for png in ('diagnosis_gyro_x.png', 'diagnosis_gyro_x_record2.png'):
         assert (out / png).stat().st_size > 10_000
 

@@ -87,8 +87,8 @@ def test_short_or_non_finite_input_is_not_tested():
 
 
 def test_the_bench_screen_flags_set_ajs_chopped_term_and_not_its_delay():
-    # bench/screen_nyquist.py on 60 s harness records (the study runs them at 15 min).
-    bench = bench_script.load('screen_nyquist')
+    # bench/screen_swing.py on 60 s harness records (the study runs them at 15 min).
+    bench = bench_script.load('screen_swing')
     shapes = bench.harness.held_out_shapes(1000.0, 'aj')
     chop = bench.screen([('scale_factor_nonlinearity', 1)], 11, shapes, 60.0)
     delay = bench.screen([('time_delay', 1)], 11, shapes, 60.0)
