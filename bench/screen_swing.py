@@ -1,11 +1,13 @@
 """
-The swing screens beside the gap (Nyquist, waveform drift) over a harness's shape sets.
+The swing screens beside the gap (Nyquist, waveform drift, IMU stalls) over a harness's shape sets.
 
 Records as ``validate_diagnosis_swing.py`` makes them (15 min, 1 kHz, adis16405 preset, 5 s
 period unless ``--period``; the same seeds), no diagnosis run: per record the screen's
 statistic, p and flag. ``--screen nyquist`` (``gyro_char.diagnosis.swing_nyquist``): every
 shape but an alternating one should pass; ``--screen drift`` (``swing_drift``): every shape
-constant over the run should. Clean runs (``--clean N``) give the false warnings. Usage::
+constant over the run should; ``--screen stalls`` (``swing_stalls``): every shape whose
+stamps are not a stalling host's should (the statistic: the mean latency, s). Clean runs
+(``--clean N``) give the false warnings. Usage::
 
     python bench/screen_swing.py                   # Nyquist, the development shapes
     python bench/screen_swing.py --held-out aj     # one held-out set
@@ -20,10 +22,12 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from gyro_char.diagnosis.swing_drift import record_drift  # noqa: E402
 from gyro_char.diagnosis.swing_nyquist import record_screen  # noqa: E402
+from gyro_char.diagnosis.swing_stalls import record_stalls  # noqa: E402
 
 import validate_diagnosis_swing as harness  # noqa: E402
 
-SCREENS = {'nyquist': (record_screen, 'chi2'), 'drift': (record_drift, 'statistic')}
+SCREENS = {'nyquist': (record_screen, 'chi2'), 'drift': (record_drift, 'statistic'),
+           'stalls': (lambda imu, enc, axis, period: record_stalls(imu), 'mean_latency_s')}
 
 
 def screen(truth, seed, shape_set, duration, kind='nyquist',
@@ -38,8 +42,8 @@ def line(s: dict, key: str) -> str:
     """Return one record's statistic, p and flag (or why it was not tested)."""
     if not s.get('tested', True):
         return f'not tested: {s["reason"]}'
-    return (f'{key} {s[key]:10.1f} p {s["p_value"]:.2e}'
-            f'{"  FLAGGED" if s["flagged"] else ""}')
+    p = f' p {s["p_value"]:.2e}' if 'p_value' in s else ''
+    return f'{key} {s[key]:10.4g}{p}{"  FLAGGED" if s["flagged"] else ""}'
 
 
 def main(argv=None) -> int:

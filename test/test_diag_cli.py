@@ -137,6 +137,9 @@ def test_diagnose_swing_two_periods_and_a_holdout_write_the_contract(tmp_path):
     # Too short for the waveform screen's six segments of 12 periods: not tested, said why.
     assert all(not r['waveform_drift']['tested'] and 'need' in r['waveform_drift']['reason']
                for r in recs)
+    # Simulated stamps carry white jitter only: no gaps, no stalls.
+    assert all(r['imu_stalls']['tested'] and r['imu_stalls']['gaps'] == 0
+               and not r['imu_stalls']['flagged'] for r in recs)
     # The withheld run: the model fitted on the other two shrinks its gap.
     h = d['holdout']
     assert h['final_gap'] < 0.6 * h['baseline_gap']
@@ -144,6 +147,7 @@ def test_diagnose_swing_two_periods_and_a_holdout_write_the_contract(tmp_path):
     assert [e['name'] for e in h['effects']] == ['time_delay']
     assert h['record']['rate_nyquist']['tested'] and not h['record']['rate_nyquist']['flagged']
     assert 'reason' in h['record']['waveform_drift']
+    assert h['record']['imu_stalls']['tested'] and not h['record']['imu_stalls']['flagged']
     for png in ('diagnosis_gyro_x.png', 'diagnosis_gyro_x_record2.png'):
         assert (out / png).stat().st_size > 10_000
 

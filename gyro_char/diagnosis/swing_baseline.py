@@ -9,6 +9,8 @@ from gyro_char.swing.filter import estimate_swing
 import numpy as np
 
 PRESET = 'adis16405'  # the twins' structure: the fitted numbers override what matters
+OUTLIER_MADS = 8.0    # stamps this many median absolute departures off their line: not jitter
+TRIM_MIN = 3          # stamps at least kept for the refit
 
 
 @dataclass
@@ -62,13 +64,28 @@ def sample_numbers(t: np.ndarray) -> np.ndarray:
     Return each stamp's sample number on the nominal grid, dropped samples counted.
 
     An interval of about k median intervals is k samples (at least one); with no positive
-    median interval, one sample a stamp.
+    median interval, one sample a stamp. A long interval is not always a loss: a host that
+    stalls stamps its backlog late, in a burst after the stall, every sample kept (15 000
+    burst steps of an eighth of an interval on a 15-min 1 kHz run with 207 stalls of 66 ms;
+    counted as losses they made the interval 1.4 % short). Of the two numberings, losses
+    counted or none, the one that puts the stamps nearer a straight line (``_line_misfit``).
     """
     d = np.diff(np.asarray(t, dtype=np.float64))
     med = float(np.median(d)) if d.size else 0.0
+    plain = np.arange(d.size + 1, dtype=np.float64)
     if not med > 0:
-        return np.arange(d.size + 1, dtype=np.float64)
-    return np.concatenate([[0.0], np.cumsum(np.maximum(np.round(d / med), 1.0))])
+        return plain
+    lost = np.concatenate([[0.0], np.cumsum(np.maximum(np.round(d / med), 1.0))])
+    if lost[-1] == plain[-1] or _line_misfit(t, lost) <= _line_misfit(t, plain):
+        return lost
+    return plain
+
+
+def _line_misfit(t: np.ndarray, k: np.ndarray) -> float:
+    """Return the median absolute departure of the stamps ``t`` from their line on ``k``."""
+    k0, t0 = k - k.mean(), t - np.mean(t)
+    slope = float(np.dot(k0, t0) / np.dot(k0, k0))
+    return float(np.median(np.abs(t0 - slope * k0)))
 
 
 def sample_interval(t: np.ndarray) -> float:
@@ -88,7 +105,16 @@ def sample_interval(t: np.ndarray) -> float:
         return float(t[-1] - t[0]) / (t.size - 1)
     k = sample_numbers(t)
     k -= k.mean()
-    return float(np.dot(k, t - t.mean()) / np.dot(k, k))
+    t0 = t - t.mean()
+    slope = float(np.dot(k, t0) / np.dot(k, k))
+    # Refitted without the stamps far off the line (a stall's late backlog: its bursts of
+    # latency bent the slope by 3e-7, a quarter interval over the run); jitter keeps all.
+    res = t0 - slope * k
+    keep = np.abs(res - np.median(res)) <= OUTLIER_MADS * np.median(np.abs(res - np.median(res)))
+    if TRIM_MIN < np.count_nonzero(keep) < t.size:
+        kk, tk = k[keep] - k[keep].mean(), t0[keep] - t0[keep].mean()
+        slope = float(np.dot(kk, tk) / np.dot(kk, kk))
+    return slope
 
 
 def static_noise(channel: str, preset: str = PRESET) -> dict:

@@ -184,8 +184,7 @@ def run_swing(args, console: Console) -> List[dict]:
     from dataclasses import replace
 
     from gyro_char.diagnosis import engine as diagnose, swing as diag_swing
-    from gyro_char.diagnosis.swing_drift import drift_warning, record_drift
-    from gyro_char.diagnosis.swing_nyquist import record_screen, screen_warning
+    from gyro_char.diagnosis.swing_screens import record_screens, screen_warnings
     from gyro_char.report.diagnosis_plot import plot_diagnosis
 
     check = check_repeats(args)
@@ -212,15 +211,12 @@ def run_swing(args, console: Console) -> List[dict]:
     out['per_record'] = per_record(args.inputs, bases)
     screens = []
     for i, ((imu, enc, _), b, rec) in enumerate(zip(records, bases, out['per_record'])):
-        rec['rate_nyquist'] = record_screen(imu, enc, b.axis, b.period_s)
-        rec['waveform_drift'] = record_drift(imu, enc, b.axis, b.period_s)
+        rec.update(record_screens(imu, enc, b.axis, b.period_s))
         screens.append((f'record {i + 1}', rec))
     if hold is not None:
         out['holdout'] = swing_holdout_check(diag, hold, bases, args)
         screens.append(('held-out record', out['holdout']['record']))
-    warnings = [w for label, rec in screens
-                for w in (screen_warning(label, rec['rate_nyquist']),
-                          drift_warning(label, rec['waveform_drift'])) if w]
+    warnings = [w for label, rec in screens for w in screen_warnings(label, rec)]
     if warnings:
         out['warnings'] = out.get('warnings', []) + warnings
     os.makedirs(args.out, exist_ok=True)
@@ -279,8 +275,7 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
     from gyro_char.diagnosis import gap as diag_gap, swing as diag_swing
     from gyro_char.diagnosis.engine import excess_gap
     from gyro_char.diagnosis.fit import GapObjective
-    from gyro_char.diagnosis.swing_drift import record_drift
-    from gyro_char.diagnosis.swing_nyquist import record_screen
+    from gyro_char.diagnosis.swing_screens import record_screens
 
     imu, enc, period = hold
     problem = diag_swing.swing_records_problem(
@@ -300,8 +295,7 @@ def swing_holdout_check(diag, hold, bases, args) -> dict:
             'effects': [{'name': n, 'params': p} for n, p in diag.model],
             'record': {'period_s': b.period_s, 'amplitude_rad': b.amplitude,
                        'kalman_scale_factor_error': b.record_scale_factor_error,
-                       'rate_nyquist': record_screen(imu, enc, b.axis, b.period_s),
-                       'waveform_drift': record_drift(imu, enc, b.axis, b.period_s)},
+                       **record_screens(imu, enc, b.axis, b.period_s)},
             'note': 'effect parameters and the pooled scale-factor error fixed from the fit; '
                     'bias, drift and noise levels of the record are refitted'}
 
