@@ -81,40 +81,47 @@ def sample_numbers(t: np.ndarray) -> np.ndarray:
     return plain
 
 
+def _line_slope(k: np.ndarray, t: np.ndarray) -> float:
+    """Return the least-squares slope of the stamps ``t`` on the sample numbers ``k``."""
+    k0, t0 = k - k.mean(), t - t.mean()
+    return float(np.dot(k0, t0) / np.dot(k0, k0))
+
+
 def _line_misfit(t: np.ndarray, k: np.ndarray) -> float:
     """Return the median absolute departure of the stamps ``t`` from their line on ``k``."""
-    k0, t0 = k - k.mean(), t - np.mean(t)
-    slope = float(np.dot(k0, t0) / np.dot(k0, k0))
-    return float(np.median(np.abs(t0 - slope * k0)))
+    res = (t - t.mean()) - _line_slope(k, t) * (k - k.mean())
+    return float(np.median(np.abs(res)))
+
+
+def stamp_grid(t: np.ndarray) -> Tuple[np.ndarray, float]:
+    """
+    Return the stamps' sample numbers (``sample_numbers``) and their mean interval.
+
+    The interval is the least-squares slope on the sample numbers, not the span over the
+    count: that carries the two end stamps' jitter whole (10-20 us over a 15-min run at
+    1 kHz), and a twin whose gyro and encoder intervals differ by it drifts through a
+    quarter of the interpolation phase; its residual's increment correlation moved by 2.4
+    times its own scatter. The slope is refitted without the stamps far off the line (a
+    stall's late backlog: its bursts of latency bent the slope by 3e-7, a quarter interval
+    over the run); white jitter keeps them all. Fewer than 3 stamps, or stamps that do not
+    advance: the span over the count.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    k = sample_numbers(t)
+    if t.size < 3 or not float(np.median(np.diff(t))) > 0:
+        return k, float(t[-1] - t[0]) / max(t.size - 1, 1)
+    slope = _line_slope(k, t)
+    res = (t - t.mean()) - slope * (k - k.mean())
+    dev = np.abs(res - np.median(res))
+    keep = dev <= OUTLIER_MADS * np.median(dev)
+    if TRIM_MIN < np.count_nonzero(keep) < t.size:
+        slope = _line_slope(k[keep], t[keep])
+    return k, slope
 
 
 def sample_interval(t: np.ndarray) -> float:
-    """
-    Return the mean interval of the stamps ``t``: their least-squares slope on the sample number.
-
-    Not the span over the count: that carries the two end stamps' jitter whole (10-20 us over
-    a 15-min run at 1 kHz), and a twin whose gyro and encoder intervals differ by it drifts
-    through a quarter of the interpolation phase; its residual's increment correlation moved
-    by 2.4 times its own scatter. The sample numbers count dropped samples
-    (``sample_numbers``).
-    """
-    t = np.asarray(t, dtype=np.float64)
-    if t.size < 3:
-        return float(t[-1] - t[0]) / max(t.size - 1, 1)
-    if not float(np.median(np.diff(t))) > 0:
-        return float(t[-1] - t[0]) / (t.size - 1)
-    k = sample_numbers(t)
-    k -= k.mean()
-    t0 = t - t.mean()
-    slope = float(np.dot(k, t0) / np.dot(k, k))
-    # Refitted without the stamps far off the line (a stall's late backlog: its bursts of
-    # latency bent the slope by 3e-7, a quarter interval over the run); jitter keeps all.
-    res = t0 - slope * k
-    keep = np.abs(res - np.median(res)) <= OUTLIER_MADS * np.median(np.abs(res - np.median(res)))
-    if TRIM_MIN < np.count_nonzero(keep) < t.size:
-        kk, tk = k[keep] - k[keep].mean(), t0[keep] - t0[keep].mean()
-        slope = float(np.dot(kk, tk) / np.dot(kk, kk))
-    return slope
+    """Return the mean interval of the stamps ``t`` (``stamp_grid``: dropped samples counted)."""
+    return stamp_grid(t)[1]
 
 
 def static_noise(channel: str, preset: str = PRESET) -> dict:

@@ -4,7 +4,7 @@ The swing screens that run beside the gap, together: one call per record, one li
 Each screen looks at what the gap cannot see or no catalogue effect models: the rate at the
 gyro's Nyquist frequency (``swing_nyquist``), a waveform that changes over the run
 (``swing_drift``) and a host that stalls and stamps its backlog late (``swing_stalls``). The
-diagnosis reports them per record under the keys below and turns the flagged ones into
+diagnosis reports them per record and turns the flagged ones into
 warnings.
 """
 from typing import List
@@ -14,13 +14,11 @@ from gyro_char.diagnosis.swing_nyquist import record_screen, screen_warning
 from gyro_char.diagnosis.swing_stalls import record_stalls, stall_warning
 from gyro_char.records import Recording
 
-__all__ = ['SCREEN_KEYS', 'record_screens', 'screen_warnings']
-
-SCREEN_KEYS = ('rate_nyquist', 'waveform_drift', 'imu_stalls')
+__all__ = ['record_screens', 'screen_warnings']
 
 
 def record_screens(imu: Recording, encoder: Recording, axis: str, period_s: float) -> dict:
-    """Return the three screens of one swing record, keyed as in ``SCREEN_KEYS``."""
+    """Return the three screens of one swing record: rate_nyquist, waveform_drift, imu_stalls."""
     return {'rate_nyquist': record_screen(imu, encoder, axis, period_s),
             'waveform_drift': record_drift(imu, encoder, axis, period_s),
             'imu_stalls': record_stalls(imu)}

@@ -4,7 +4,7 @@ A screen of a swing run's IMU stamps for host stalls: gaps whose samples come la
 A host that stamps each IMU sample when it reads it, and now and then stalls (a garbage
 collection, a disk write-back, a busy executor), leaves a pattern in the stamps: a gap, then
 the samples the sensor produced meanwhile stamped in a burst as the reader catches up, none
-lost. Numbered as kept (``swing_baseline.sample_numbers``), every stamp lies on the sample
+lost. Numbered as kept (``swing_baseline.stamp_grid``), every stamp lies on the sample
 grid or late of it, and how late is the latency. Across each burst the gyro angle integrated
 on those stamps is off by the rate change times the latency, a step the swing filter then
 reads as noise: on a 15-min 1 kHz run, stalls every 4 s of 64 and 128 ms (mean) raised
@@ -15,7 +15,7 @@ stamps resume on the grid) is not flagged.
 """
 from typing import Optional
 
-from gyro_char.diagnosis.swing_baseline import sample_interval, sample_numbers
+from gyro_char.diagnosis.swing_baseline import stamp_grid
 from gyro_char.records import Recording
 from gyro_char.swing.batch import GAP_RELEASE_FACTOR
 import numpy as np
@@ -42,9 +42,8 @@ def stall_screen(t: np.ndarray) -> dict:
     if not med > 0:
         return {'tested': False, 'reason': 'the stamps do not advance'}
     gaps = int(np.count_nonzero(d > GAP_RELEASE_FACTOR * med))
-    k = sample_numbers(t)
+    k, dt = stamp_grid(t)
     lost = int(round(k[-1])) - (t.size - 1)
-    dt = sample_interval(t)
     res = t - dt * k
     latency = res - float(np.median(res))
     late = latency > LATE_STEPS * dt
