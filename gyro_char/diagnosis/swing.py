@@ -32,6 +32,8 @@ from gyro_char.diagnosis.swing_spaces import (
     probe_twins, signs, swing_spaces, unresolved_pairs, with_saturation, with_stamp_band,
     with_tables)
 from gyro_char.diagnosis.swing_speed_gate import with_speed_gate
+from gyro_char.diagnosis.swing_stalls import (
+    destalled, stall_latency, twin_latency, with_stall_form)
 from gyro_char.diagnosis.swing_twin import (
     record_observables, record_residuals, record_scale, simulate_twin, twin_config)
 from gyro_char.diagnosis.twins import twin_effects
@@ -93,8 +95,12 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
         raise InputError(f'unknown swing method {method!r}: expected or twins')
     records = [(*_cut(i, e, max_samples), float(p)) for i, e, p in records]
     fitted = bases is None
+    # A record whose stamps show host stalls is calibrated at its samples' own instants
+    # (``swing_stalls``); its observables stay the record's.
+    traces = [stall_latency(imu.t) for imu, _, _ in records]
+    own = [destalled(imu, tr) for (imu, _, _), tr in zip(records, traces)]
     if fitted:
-        bases = [fit_baseline(i, e, p, axis) for i, e, p in records]
+        bases = [fit_baseline(i, e, p, axis) for i, (_, e, p) in zip(own, records)]
         sf = pooled_scale_factor(bases)[0] if scale_factor is None else float(scale_factor)
         bases = [replace(b, scale_factor_error=sf) for b in bases]
     bases = [replace(b, samples=len(imu)) for b, (imu, _, _) in zip(bases, records)]
@@ -110,7 +116,11 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
              for (imu, enc, _), b, r in zip(records, bases, ranges)]
     if fitted:
         bases = [calibrate_n(calibrate_encoder(b, enc), imu, enc, r)
-                 for b, (imu, enc, _), r in zip(bases, records, ranges)]
+                 for b, imu, (_, enc, _), r in zip(bases, own, records, ranges)]
+        bases = [b if tr is None else replace(b, stamp_latency=twin_latency(
+            tr, imu.t, enc.t, enc.channels[ENCODER_CHANNEL], b.period_s,
+            twin_config(b).stand.phase, b.gyro_start))
+            for b, tr, (imu, enc, _) in zip(bases, traces, records)]
     # The rate dependence of the scale factor: each further record's scale against the first's.
     scales = [record_scale(imu, enc, b.axis) for (imu, enc, _), b in zip(records, bases)]
     for i in range(1, len(records)):
@@ -153,7 +163,8 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
     spaces = with_speed_gate(with_stamp_band(spaces, reals, ranges, probe, bases), bases)
     crests = [(float(np.nanmax(imu.channels[ch])), -float(np.nanmin(imu.channels[ch])))
               for imu, _, _ in records]
-    spaces = with_rate_noise(with_saturation(spaces, crests, bases), bases)
+    spaces = with_stall_form(with_rate_noise(with_saturation(spaces, crests, bases), bases),
+                             bases)
     units = dict(UNITS, scale_factor_shift='rad/s')
     baseline = bases[0].to_json()
     if len(bases) > 1:

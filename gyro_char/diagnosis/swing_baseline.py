@@ -1,5 +1,5 @@
 """The paper's swing model fitted to one record: the baseline every swing twin starts from."""
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional, Sequence, Tuple
 
 from gyro_char.diagnosis.twins import output_step
@@ -44,6 +44,9 @@ class SwingBaseline:
     encoder_power_sd: float = 0.0
     # Standard error of log N as calibrated on the residual's gyro band; 0 when not calibrated.
     n_log_sd: float = 0.0
+    # The record's IMU stamp latency laid on the twin's samples (s) where its stamps show
+    # host stalls (``swing_stalls``), else None: what a stall form puts into a twin's stamps.
+    stamp_latency: Optional[np.ndarray] = field(default=None, compare=False, repr=False)
 
     @property
     def peak_rate(self) -> float:

@@ -8,20 +8,27 @@ lost. Numbered as kept (``swing_baseline.stamp_grid``), every stamp lies on the 
 grid or late of it, and how late is the latency. Across each burst the gyro angle integrated
 on those stamps is off by the rate change times the latency, a step the swing filter then
 reads as noise: on a 15-min 1 kHz run, stalls every 4 s of 64 and 128 ms (mean) raised
-its white-noise estimate 1.23 and 2.5 times. No catalogue effect makes it (the stamp
-jitter candidates are Gaussian and move the stamps both ways), so the screen reports it
-beside the gap, as the Nyquist and waveform screens do. A run whose gaps are losses (the
-stamps resume on the grid) is not flagged.
+its white-noise estimate 1.23 and 2.5 times. The screen reports it beside the gap, as the
+Nyquist and waveform screens do; a run it flags is calibrated on its samples' own instants
+(``destalled``) and offered the stall form of the delay (``with_stall_form``: the twins'
+stamps carry the record's own latency trace, ``stall_latency`` laid on the twin by
+``twin_latency``, times a fitted gain). A run whose gaps are losses (the stamps resume on
+the grid) is not flagged.
 """
 from typing import Optional
+from dataclasses import replace
+from typing import List, Sequence
 
-from gyro_char.diagnosis.swing_baseline import stamp_grid
+from gyro_char.diagnosis.fit import EffectSpace, Param
+from gyro_char.diagnosis.swing_baseline import stamp_grid, SwingBaseline
 from gyro_char.records import Recording
 from gyro_char.swing.batch import GAP_RELEASE_FACTOR
 import numpy as np
 
 LATE_STEPS = 0.5        # a stamp this many intervals after its grid instant is late
 MIN_SAMPLES = 64
+STALL_GAIN = (0.05, 3.0)   # the stall form's gain searched
+JITTER_MADS = 6.0     # a latency this many MADs of the stamps' latencies up: a backlog
 
 
 def stall_screen(t: np.ndarray) -> dict:
@@ -55,6 +62,61 @@ def stall_screen(t: np.ndarray) -> dict:
             'flagged': bool(gaps and not lost and stalls)}
 
 
+def stall_latency(t: np.ndarray) -> Optional[np.ndarray]:
+    """
+    Return each stamp's latency off the sample grid where the screen flags stalls, else None.
+
+    The latency counts only where a stamp stands above the grid by more than the stamps' own
+    jitter (JITTER_MADS median absolute departures of the latencies), so that a trace carried
+    into a twin's stamps holds the stalls' backlogs down to their last microseconds and not
+    the record's white stamp jitter, which the twin draws for itself.
+    """
+    if not stall_screen(t).get('flagged'):
+        return None
+    t = np.asarray(t, dtype=np.float64)
+    k, dt = stamp_grid(t)
+    res = t - dt * k
+    latency = res - float(np.median(res))
+    floor = JITTER_MADS * float(np.median(np.abs(latency)))
+    return np.where(latency > floor, latency, 0.0)
+
+
+def destalled(imu: Recording, latency: Optional[np.ndarray]) -> Recording:
+    """Return ``imu`` with each stamp moved back by its latency (the samples' own instants)."""
+    if latency is None:
+        return imu
+    return Recording(imu.t - latency, imu.channels, imu.source, list(imu.notes))
+
+
+def twin_latency(latency: np.ndarray, imu_t: np.ndarray, enc_t: np.ndarray,
+                 angle: np.ndarray, period_s: float, twin_phase: float,
+                 gyro_start: float) -> np.ndarray:
+    """
+    Return the record's latency trace laid on a twin's samples, at the same swing phase.
+
+    A stall's error is the rate at its instant times the latency, so the trace goes where the
+    twin's stand is at the phase the record's was: the record's phase at the start of the
+    overlap from a least-squares sine on the encoder angle (at the period the twins use),
+    the twin's own (``twin_phase``) at its time 0, the shift taken within half a period and
+    rounded to whole samples. Samples of the twin the record has no trace for get none.
+    """
+    k, dt = stamp_grid(imu_t)
+    g0 = float(np.median(imu_t - dt * k))
+    t_ov = max(float(imu_t[0]), float(enc_t[0]))
+    w = 2.0 * np.pi / period_s
+    u = enc_t - t_ov
+    a = np.column_stack([np.sin(w * u), np.cos(w * u), np.ones_like(u)])
+    c = np.linalg.lstsq(a, angle, rcond=None)[0]
+    shift = ((float(np.arctan2(c[1], c[0])) - twin_phase) / w + 0.5 * period_s) % period_s \
+        - 0.5 * period_s
+    m = int(round((t_ov + gyro_start - shift - g0) / dt))
+    out = np.zeros(latency.size)
+    lo, hi = max(0, -m), min(latency.size, latency.size - m)
+    if hi > lo:
+        out[lo:hi] = latency[lo + m:hi + m]
+    return out
+
+
 def record_stalls(imu: Recording) -> dict:
     """Return the stall screen of a swing record's IMU stamps."""
     return stall_screen(imu.t)
@@ -70,6 +132,28 @@ def stall_warning(label: str, screen: dict) -> Optional[str]:
             f'{screen["mean_latency_s"]:.3g} s on average over the run and up to '
             f'{screen["max_latency_s"]:.3g} s): a host that stamps samples when it reads '
             'them and stalls: a delay that varies along the run. The gyro angle across each '
-            'burst is off by the rate change times the latency; no catalogue effect models '
-            'it, so the effect named for the gap may stand in for it (stamp the samples at '
-            'the sensor or in the driver); see "per_record" imu_stalls')
+            'burst is off by the rate change times the latency; the run was calibrated at '
+            'its samples\' own instants and offered the delay\'s stall form (time_delay '
+            'stall_gain: the twins\' stamps carry this latency). Stamp the samples at the '
+            'sensor or in the driver; see "per_record" imu_stalls')
+
+
+def with_stall_form(spaces: List[EffectSpace],
+                    bases: Sequence[SwingBaseline]) -> List[EffectSpace]:
+    """
+    Give the delay a stall form where a record carries a latency trace (its screen flagged).
+
+    The form's stamps carry ``stall_gain`` times the record's trace and no constant delay;
+    1 is a host that stamps on read and stalls, the samples taken on time; searched from a
+    twentieth to three times (a trace read off jittered stamps, a gain near 1 either way).
+    """
+    if not any(b.stamp_latency is not None for b in bases):
+        return spaces
+    out = []
+    for sp in spaces:
+        if sp.name == 'time_delay':
+            form = EffectSpace('time_delay', [Param('stall_gain', *STALL_GAIN, init=1.0)],
+                               fixed={'delay_s': 0.0, 'lag_s': 0.0})
+            sp = replace(sp, alternatives=tuple(sp.alternatives) + (form,))
+        out.append(sp)
+    return out

@@ -57,7 +57,8 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
                             for n, p in effects if n == 'time_delay')
     run = simulator.simulate_swing(cfg, duration=base.duration,
                                    seed=int(seed), effects=specs,
-                                   channels=(f'gyro_{base.axis}',))
+                                   channels=(f'gyro_{base.axis}',),
+                                   stamp_latency=base.stamp_latency)
     return run.imu, run.encoder
 
 

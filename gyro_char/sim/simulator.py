@@ -94,18 +94,21 @@ def _select(channels: Optional[Iterable[str]]) -> tuple:
 
 def simulate_swing(config=None, *, duration: float = 900.0, seed: int = 0,
                    effects: Sequence = (), channels: Optional[Iterable[str]] = None,
-                   quiet: bool = True) -> SimRun:
+                   quiet: bool = True, stamp_latency=None) -> SimRun:
     """
     Simulate a swing-stand run: IMU at ``gyro.rate_hz``, encoder at ``encoder.rate_hz``.
 
     ``channels`` limits the IMU channels generated (e.g. ``('gyro_x',)`` for fast Monte Carlo
-    runs); the default is all six.
+    runs); the default is all six. ``stamp_latency`` (s, one value an IMU sample) is the
+    host latency trace a ``time_delay`` with ``stall_gain`` puts into the stamps.
     """
     cfg = _config(config)
     fx = build_effects(effects)
     n = _check_run(duration, seed, cfg.gyro.rate_hz)
     ctx = SimContext(config=cfg, kind='swing', seed=int(seed), dt=1.0 / cfg.gyro.rate_hz,
                      axis=AXES.index(cfg.gyro.axis))
+    if stamp_latency is not None:
+        ctx.extras['stamp_latency'] = stamp_latency
     ctx.stand_angle = lambda t: stand_angle_clean(cfg.stand, t)
     ctx.stand_rate = lambda t: stand_rate_clean(cfg.stand, t)
     imu, truth_channels = _imu_chain(cfg, ctx, fx, n, _select(channels), quiet)

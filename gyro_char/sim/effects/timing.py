@@ -39,18 +39,25 @@ class TimeDelay(Effect):
                'table_rads > 0: the stamp latency also depends on the speed, + sum_n d_n '
                '(T_n(omega / table_rads) - T_n(0)), n = 2, 4, ..., 14 (a driver whose work '
                'grows with the rate, a smoother that adapts to the motion): an even function '
-               'of the true rate omega when the sample was taken.')
+               'of the true rate omega when the sample was taken. '
+               'stall_gain > 0: the stamps also carry stall_gain times a host latency trace '
+               'given to the run (``simulate_swing(stamp_latency=...)``, one value a sample, '
+               's): a host that stamps each sample when it reads it and now and then stalls, '
+               'its backlog stamped late in a burst (the trace measured off a record\'s own '
+               'stamps; 1: the samples were taken on time and only stamped late).')
     PARAMS = {'delay_s': (1.0e-3, 's', 'total latency: stamp shift plus the lag'),
               'lag_s': (0.0, 's', 'part of delay_s that is a one-pole gyro lag (>= 0)'),
               'table_rads': (0.0, 'rad/s', 'range of the speed-dependent latency (0: none)'),
-              **table_params('d', SPEED_ORDERS, 's', 'speed-dependent latency')}
+              **table_params('d', SPEED_ORDERS, 's', 'speed-dependent latency'),
+              'stall_gain': (0.0, '1', 'share of the run\'s stamp-latency trace in the stamps')}
 
     def check(self):
-        if self.lag_s < 0 or self.table_rads < 0:
-            raise InputError('time_delay: lag_s and table_rads must be >= 0')
+        if self.lag_s < 0 or self.table_rads < 0 or self.stall_gain < 0:
+            raise InputError('time_delay: lag_s, table_rads and stall_gain must be >= 0')
 
     def describe(self):
-        return describe_without(self, 'lag_s', 'table_rads', *(f'd{n}' for n in SPEED_ORDERS))
+        return describe_without(self, 'lag_s', 'table_rads', 'stall_gain',
+                                *(f'd{n}' for n in SPEED_ORDERS))
 
     def output(self, ctx, gyro, accel):
         return one_pole(gyro, self.lag_s, ctx.dt), accel
@@ -63,7 +70,34 @@ class TimeDelay(Effect):
             # A latency falling faster than time passes would reorder the samples: a driver
             # still sends them in order, at least a tenth of an interval apart.
             late = increasing(late, 0.1 * ctx.dt)
+        if self.stall_gain > 0.0:
+            late = in_order(late + self.stall_gain * stall_trace(ctx, t.size), 0.1 * ctx.dt)
         return late
+
+
+def in_order(s: np.ndarray, floor: float) -> np.ndarray:
+    """
+    Return stamps ``s`` sent in order: each at least ``floor`` after the one before it.
+
+    A reader's stamps r_k = max(s_k, r_(k-1) + floor) (closed form: k floor plus the running
+    maximum of s_j - j floor): a stamp held back catches up as soon as its own latency allows,
+    where ``increasing`` carries every step it lengthens into all later stamps (its jitter's
+    steps below the floor added 1.6 ms of latency over a 15-min run of a stall trace).
+    """
+    k = np.arange(s.size) * floor
+    return k + np.maximum.accumulate(s - k)
+
+
+def stall_trace(ctx, n: int) -> np.ndarray:
+    """Return the run's stamp-latency trace over its ``n`` samples (zeros past its end)."""
+    trace = ctx.extras.get('stamp_latency')
+    if trace is None:
+        raise InputError('time_delay: stall_gain needs a stamp-latency trace '
+                         '(simulate_swing(stamp_latency=...))')
+    out = np.zeros(n)
+    trace = np.asarray(trace, dtype=np.float64)[:n]
+    out[:trace.size] = trace
+    return out
 
 
 # A correlated stamp error whose steps stay under this share of the sample interval (sd) is
