@@ -189,5 +189,10 @@ def test_a_stalled_run_is_calibrated_on_its_instants_and_its_stall_form_closes_t
     run = simulator.simulate_swing(_config(), duration=120.0, seed=5, channels=('gyro_x',))
     clean = diag_swing.swing_records_problem([(run.imu, run.encoder, 5.0)])
     assert clean.context[0].stamp_latency is None
+    # A model fitted on a stalling run, frozen and checked on a run without stalls (the
+    # held-out check): its stall form carries that run's latency, none.
+    same = engine.evaluate_model(clean, stall, repeats=4, seed=3).gap
+    assert same == pytest.approx(engine.evaluate_model(clean, [], repeats=4, seed=3).gap,
+                                 rel=1e-6)
     assert not any(p.name == 'stall_gain' for s in clean.spaces for a in s.alternatives
                    for p in a.params)

@@ -49,6 +49,11 @@ class SwingBaseline:
     stamp_latency: Optional[np.ndarray] = field(default=None, compare=False, repr=False)
 
     @property
+    def stall_trace(self) -> np.ndarray:
+        """The stamp latency a twin's stall form carries: the record's, or none (no stalls)."""
+        return np.zeros(0) if self.stamp_latency is None else self.stamp_latency
+
+    @property
     def peak_rate(self) -> float:
         return 2.0 * np.pi * self.amplitude / self.period_s
 

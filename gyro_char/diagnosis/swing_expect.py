@@ -82,7 +82,7 @@ class EffectParts:
         run = simulator.simulate_swing(cfg, seed=0,
                                        duration=min(span_s, b.duration) or span(b),
                                        effects=effects, channels=(f'gyro_{b.axis}',),
-                                       stamp_latency=b.stamp_latency)
+                                       stamp_latency=b.stall_trace)
         res = residuals(run.imu.t, run.imu.channels[f'gyro_{b.axis}'], run.encoder.t,
                         run.encoder.channels[ENCODER_CHANNEL], b.period_s)
         return res, self.scale(run.imu, run.encoder, b.axis)

@@ -58,7 +58,7 @@ def simulate_twin(base: SwingBaseline, effects: Sequence, seed: int):
     run = simulator.simulate_swing(cfg, duration=base.duration,
                                    seed=int(seed), effects=specs,
                                    channels=(f'gyro_{base.axis}',),
-                                   stamp_latency=base.stamp_latency)
+                                   stamp_latency=base.stall_trace)
     return run.imu, run.encoder
 
 
