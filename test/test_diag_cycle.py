@@ -70,10 +70,45 @@ def test_the_cycles_observables_equal_the_twins_and_its_welch_segments_a_direct_
     assert det.welch == pytest.approx(direct, rel=1e-6, abs=1e-9 * direct.max())
 
 
+@pytest.mark.parametrize('onset', [{'t0_s': 200.0}, {'t0_s': 150.0, 'rise_s': 300.0}])
+def test_a_cycle_switched_on_mid_record_equals_its_twins_and_a_direct_welch(onset):
+    p = {**CYCLE, 'cycle_s': 60.0, **onset}
+    n = 2 ** 16
+    ctx = SimContext(config=None, kind='static', seed=1, dt=DT)
+    ctx.t = np.arange(n) * DT
+    y, _ = EFFECTS['temperature_drift'](**p, axis=2).sensor(ctx, np.zeros((3, n)),
+                                                            np.zeros((3, n)))
+    plain, _ = EFFECTS['temperature_drift'](**{**CYCLE, 'cycle_s': 60.0}, axis=2).sensor(
+        ctx, np.zeros((3, n)), np.zeros((3, n)))
+    t0, rise = onset['t0_s'], onset.get('rise_s', 0.0)
+    ramp = np.clip((ctx.t - t0) / rise, 0, 1) if rise else (ctx.t >= t0) * 1.0
+    assert y[2] == pytest.approx(plain[2] * ramp, abs=1e-15)
+    assert not y[2][ctx.t < t0].any()
+    check_twin_means([('temperature_drift', p)], n=n)
+    spec = model_spectrum(N_ARW, LSB, DT, [('temperature_drift', p)])
+    det = expected.deterministic(spec, expected.grids(n, DT), obs.ACF_LAGS)
+    direct = obs.welch_psd(obs.detrend(mean_term(spec, n)), DT)[1]
+    assert det.welch == pytest.approx(direct, rel=1e-6, abs=1e-9 * direct.max())
+
+
+def test_a_cycle_that_starts_mid_record_is_offered_the_onset_form():
+    p = {**CYCLE, 't0_s': 2400.0, 'rise_s': 1200.0}
+    x = static.simulate_twin(BASE, 720000, [('temperature_drift', p)], 9)
+    space = static_spaces.static_spaces(BASE, x, ['temperature_drift'])[0]
+    onset = space.alternatives[-1]
+    names = [q.name for q in onset.params]
+    assert names[-2:] == ['t0_s', 'rise_s'] and onset.fixed['cycle_s'] == pytest.approx(
+        900.0, rel=0.01)
+    # The record's average amplitude, diluted by the two thirds the cycle is off or rising,
+    # is inside the onset form's range and under its true value.
+    amp = onset.params[0]
+    assert amp.lo < 3e-3 < amp.hi and amp.init < 1.5 * 3e-3
+
+
 def test_a_two_hour_cycle_is_named_with_its_period_and_amplitudes():
     x = static.simulate_twin(BASE, 720000, [('temperature_drift', CYCLE)], 8)
     space = static_spaces.static_spaces(BASE, x, ['temperature_drift'])[0]
-    assert space.alternatives[-1].fixed['cycle_s'] == pytest.approx(900.0, rel=1e-3)
+    assert space.alternatives[-2].fixed['cycle_s'] == pytest.approx(900.0, rel=1e-3)
     d = run(closed_form_problem([x], DT, twins=8, seed=3), repeats=8, seed=3)
     assert d.selected_effects[:1] == ['temperature_drift']
     fit = d.steps[0]['params']

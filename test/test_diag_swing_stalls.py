@@ -112,6 +112,17 @@ def test_the_latency_trace_is_the_backlog_and_moves_the_stamps_back_to_their_ins
     assert destalled(rec, None) is rec
 
 
+def test_a_latency_that_is_not_a_drained_backlog_gives_no_trace():
+    # Two thirds of the run late by 3 ms of wandering latency beside the stalls (a playout
+    # buffer): cut at the stamps' jitter the trace flickers on and off, and the stamps moved
+    # back by it would leave their order, so there is none (the run is diagnosed as before).
+    r, p, count = stalled()
+    q = r.copy()
+    q[100_000:] += 0.003 + 3e-4 * np.random.default_rng(3).standard_normal(q.size - 100_000)
+    q = in_order(q, 0.1 * DT)
+    assert stall_screen(q)['flagged'] and stall_latency(q) is None
+
+
 def test_the_trace_goes_where_the_twin_swings_at_the_records_phase():
     # A record whose swing is 1.3 s into its cycle at its first sample: the twin (phase 0 at
     # its time 0) gets the latency 1.3 s later in its samples, the stall at the same angle.

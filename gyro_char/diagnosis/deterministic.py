@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from gyro_char.diagnosis import observables as obs
 from gyro_char.diagnosis.spectra import ModelSpectrum
+from gyro_char.sim.effects.base import cycle_envelope
 import numpy as np
 from scipy import signal
 
@@ -36,9 +37,17 @@ def mean_term(spec: ModelSpectrum, n: int) -> np.ndarray:
     out = np.zeros(n)
     for amp, tau, t0 in spec.warmups:
         out += warmup_at(spec, t, amp, tau, t0)
-    for amp, period, phase in spec.cycles:
-        out += amp * np.sin(2.0 * np.pi * (t + spec.time_shift) / period + phase)
+    if spec.cycles:
+        out += cycle_at(spec, t)
     return out
+
+
+def cycle_at(spec: ModelSpectrum, t: np.ndarray) -> np.ndarray:
+    """The cycle's sinusoids at output times ``t``, times its envelope (``cycle_envelope``)."""
+    u = np.asarray(t, dtype=np.float64) + spec.time_shift
+    out = sum(amp * np.sin(2.0 * np.pi * u / period + phase)
+              for amp, period, phase in spec.cycles)
+    return out * cycle_envelope(u, *spec.cycle_onset)
 
 
 def warmup_at(spec: ModelSpectrum, t: np.ndarray, amp: float, tau: float,
@@ -124,12 +133,21 @@ def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
                 shapes.append(warmup_at(spec, t0[s] + j * g.dt, amp, tau, start))
         coef.append(a)
         shapes.append(np.exp(-j * g.dt / tau))
+    # A cycle's envelope is 1 over most segments, 0 over those before its start; the few it
+    # rises in are terms of their own, with the cycle's own values.
+    start = cycle_envelope(t0 + spec.time_shift, *spec.cycle_onset)
+    end = cycle_envelope(t0 + (L - 1) * g.dt + spec.time_shift, *spec.cycle_onset)
+    on = (start >= 1.0).astype(np.float64)
     for amp, period, phase in spec.cycles:
         # sin(w (t_s + j dt) + phase) = sin(theta_s) cos(w j dt) + cos(theta_s) sin(w j dt)
         w_rad = 2.0 * np.pi / period
         theta = w_rad * (t0 + spec.time_shift) + phase
-        coef += [amp * np.sin(theta), amp * np.cos(theta)]
+        coef += [on * amp * np.sin(theta), on * amp * np.cos(theta)]
         shapes += [np.cos(w_rad * j * g.dt), np.sin(w_rad * j * g.dt)]
+    if spec.cycles:
+        for k in np.flatnonzero((start < 1.0) & (end > 0.0)):
+            coef.append(np.where(np.arange(nseg) == k, 1.0, 0.0))
+            shapes.append(cycle_at(spec, t0[k] + j * g.dt))
     coef.append(np.full(nseg, -slope))
     shapes.append(j)
     spectra_ = []

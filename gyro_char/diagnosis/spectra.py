@@ -149,8 +149,10 @@ class ModelSpectrum:
     lines: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, mean square)
     # (amplitude, tau_s, t0_s): a transient from power-on (t0 0) or from mid-record.
     warmups: List[Tuple[float, float, float]] = field(default_factory=list)
-    # (amplitude, period, phase): a periodic cycle's sinusoids (``cycle_terms``).
+    # (amplitude, period, phase): a periodic cycle's sinusoids (``cycle_terms``), and their
+    # envelope's (t0_s, rise_s) (``cycle_envelope``).
     cycles: List[Tuple[float, float, float]] = field(default_factory=list)
+    cycle_onset: Tuple[float, float] = (0.0, 0.0)
     peaks: List[Tuple[float, float]] = field(default_factory=list)  # (f_out, width) to resolve
     holds: Optional[object] = None       # ``Holds`` or ``GateHolds``; ``lines`` then held
     unheld_lines: List[Tuple[float, float]] = field(default_factory=list)
@@ -401,6 +403,7 @@ def model_spectrum(n_white: float, lsb: float, dt: float, effects: Sequence,
             spec.lines.extend(zip(f_out.tolist(), power.tolist()))
         elif name == 'temperature_drift' and p.get('cycle_s', 0.0) > 0.0:
             spec.cycles.extend(cycle_terms(p))
+            spec.cycle_onset = (float(p.get('t0_s', 0.0)), float(p.get('rise_s', 0.0)))
         elif name == 'temperature_drift':
             for c, lag in transient_terms(p['amplitude'], p['tau_s'], p.get('rise_s', 0.0)):
                 spec.warmups.append((c, lag, p.get('t0_s', 0.0)))

@@ -56,8 +56,8 @@ class StaticExpect:
     def _deterministic(self, i, spec):
         if not has_mean_term(spec):
             return None
-        key = (i, tuple(spec.warmups), tuple(spec.cycles), spec.decimation, spec.taps,
-               spec.stages)
+        key = (i, tuple(spec.warmups), tuple(spec.cycles), spec.cycle_onset, spec.decimation,
+               spec.taps, spec.stages)
         if key not in self._det:
             if len(self._det) > 64:
                 self._det.clear()

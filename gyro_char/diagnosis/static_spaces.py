@@ -330,7 +330,7 @@ def warm_up_space(amp_lo: float, amp_hi: float, length: float, warm_sign: float,
             Param('rise_s', length / 4000, length / 20),
             replace(t0, init=start)]))
     if cycle is not None:
-        others.append(cycle_space(cycle))
+        others += [cycle_space(cycle), cycle_onset_space(cycle, length)]
     return replace(power_on, alternatives=tuple(others))
 
 
@@ -350,3 +350,19 @@ def cycle_space(cycle: CycleStart) -> EffectSpace:
             phases.append('phase' + suffix)
     return EffectSpace('temperature_drift', params, fixed=fixed,
                        estimated=('cycle_s',) + tuple(phases))
+
+
+def cycle_onset_space(cycle: CycleStart, length: float) -> EffectSpace:
+    """
+    The cycle of ``cycle_space`` switched on at ``t0_s``, its amplitude ramping over ``rise_s``.
+
+    An HVAC turned on mid-record, a loop gone unstable whose cycle grows to a limit: the
+    record's least-squares amplitudes average the envelope, so each is searched up to 6
+    times the record's (from 1.5 times: a cycle on over two thirds of the record), the start
+    over the record's first 80 %, the ramp from none (a step on) to half the record.
+    """
+    plain = cycle_space(cycle)
+    params = [replace(q, hi=6.0 * q.init, init=1.5 * q.init) for q in plain.params]
+    params += [Param('t0_s', 0.02 * length, 0.8 * length, log=False, init=0.25 * length),
+               Param('rise_s', cycle.period, 0.5 * length, off_at='lo')]
+    return replace(plain, params=params)

@@ -69,7 +69,9 @@ def stall_latency(t: np.ndarray) -> Optional[np.ndarray]:
     The latency counts only where a stamp stands above the grid by more than the stamps' own
     jitter (JITTER_MADS median absolute departures of the latencies), so that a trace carried
     into a twin's stamps holds the stalls' backlogs down to their last microseconds and not
-    the record's white stamp jitter, which the twin draws for itself.
+    the record's white stamp jitter, which the twin draws for itself. None too where the
+    stamps moved back by it would not be in order: a latency that is not a backlog drained
+    behind a stall (set AG's playout buffer at its strong level: 44 stamps out of order).
     """
     if not stall_screen(t).get('flagged'):
         return None
@@ -78,7 +80,8 @@ def stall_latency(t: np.ndarray) -> Optional[np.ndarray]:
     res = t - dt * k
     latency = res - float(np.median(res))
     floor = JITTER_MADS * float(np.median(np.abs(latency)))
-    return np.where(latency > floor, latency, 0.0)
+    latency = np.where(latency > floor, latency, 0.0)
+    return latency if np.all(np.diff(t - latency) > 0) else None
 
 
 def destalled(imu: Recording, latency: Optional[np.ndarray]) -> Recording:

@@ -242,6 +242,20 @@ def cycle_terms(params: dict) -> list:
     return out
 
 
+def cycle_envelope(t: np.ndarray, t0_s: float = 0.0, rise_s: float = 0.0) -> np.ndarray:
+    """
+    Return a cycle's amplitude envelope at times ``t``: 0 before ``t0_s``, 1 after the rise.
+
+    ``rise_s`` 0: switched on at ``t0_s`` (an HVAC or a fan turned on); > 0: a linear ramp
+    over it (a control loop gone unstable, its cycle growing to a limit). 1 everywhere with
+    both 0 (a cycle running before the record).
+    """
+    t = np.asarray(t, dtype=np.float64)
+    if rise_s > 0.0:
+        return np.clip((t - t0_s) / rise_s, 0.0, 1.0)
+    return (t >= t0_s).astype(np.float64) if t0_s > 0.0 else np.ones_like(t)
+
+
 def transient_terms(amplitude: float, tau_s: float, rise_s: float = 0.0) -> list:
     """
     Return a bias transient as (coefficient, lag) terms c exp(-(t - t0) / lag), held before t0.

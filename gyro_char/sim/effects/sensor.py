@@ -11,9 +11,9 @@ from gyro_char.allan.expected import moving_average_kernel as bartlett_kernel
 from gyro_char.errors import InputError
 from gyro_char.records import GYRO_CHANNELS, IMU_CHANNELS
 from gyro_char.sim import noise_gen
-from gyro_char.sim.effects.base import (add_truth_term, axis_param, axis_rows, cycle_terms,
-                                        describe_without, Effect, markov, register,
-                                        second_order_gm, transient_terms)
+from gyro_char.sim.effects.base import (add_truth_term, axis_param, axis_rows, cycle_envelope,
+                                        cycle_terms, describe_without, Effect, markov,
+                                        register, second_order_gm, transient_terms)
 from gyro_char.sim.effects.responses import (interleaved_memory, output_lowpass, output_notch,
                                              sense_response)
 from gyro_char.units import DEG
@@ -168,13 +168,16 @@ class TemperatureDrift(Effect):
                'room reaching the die through its lag; a bias linear in temperature gives '
                'the fundamental, a curved one (near its turnover) the harmonics): '
                'amplitude sin(2 pi t / cycle_s + phase) + amplitude2 sin(4 pi t / cycle_s + '
-               'phase2) + amplitude3 sin(6 pi t / cycle_s + phase3); tau_s, t0_s and rise_s '
-               'are then not used.')
+               'phase2) + amplitude3 sin(6 pi t / cycle_s + phase3), times an envelope: 0 '
+               'before t0_s, rising linearly to 1 over rise_s after it (an HVAC switched on '
+               'mid-record; a control loop gone unstable, its cycle growing to a limit); '
+               'both 0: the cycle runs throughout. tau_s is then not used.')
     PARAMS = {'amplitude': (0.05 * DEG, 'rad/s', 'bias offset at t = 0 (before t0_s); '
                             "a cycle's fundamental amplitude"),
               'tau_s': (600.0, 's', 'thermal time constant'),
-              't0_s': (0.0, 's', 'when the transient starts (0: at power-on)'),
-              'rise_s': (0.0, 's', 'rise time of a pulse (0: a step, no pulse)'),
+              't0_s': (0.0, 's', 'when the transient (or the cycle) starts (0: at power-on)'),
+              'rise_s': (0.0, 's', "rise time of a pulse (0: a step, no pulse); a cycle's "
+                         'amplitude ramp from t0_s'),
               'cycle_s': (0.0, 's', 'period of a periodic cycle (0: a transient, no cycle)'),
               'phase': (0.0, 'rad', "the cycle's fundamental phase at t = 0"),
               'amplitude2': (0.0, 'rad/s', "the cycle's second harmonic amplitude"),
@@ -197,6 +200,7 @@ class TemperatureDrift(Effect):
         if self.cycle_s > 0.0:
             shape = sum(a * np.sin(2.0 * np.pi * ctx.t / period + phase)
                         for a, period, phase in cycle_terms(self.params))
+            shape = shape * cycle_envelope(ctx.t, self.t0_s, self.rise_s)
         else:
             since = np.maximum(ctx.t - self.t0_s, 0.0)
             shape = sum(c * np.exp(-since / lag)
