@@ -121,8 +121,8 @@ of 34, 124 and 124 deg/h sd (tc 2 s, 2 s and 20 s); fine cycles of 18, 62 and 16
 white angle's step 14.4 arcsec a sample); tanks of 0.0068, 0.023 and 0.057 deg/s rms; log
 buffers of 29230, 2048 and 512 bytes (0.090 %, 1.3 % and 5.1 % of the ticks held).
 """
-import math
 from functools import lru_cache
+import math
 
 import heldout_detect
 from heldout_detect import allan_taus, allan_z, gm_avar
@@ -157,7 +157,7 @@ def fft_resample(x: np.ndarray, e: float) -> np.ndarray:
 
 
 def resample_z(e: float, dt: float, big_t: float) -> float:
-    """Return sqrt(T int (Delta S / S_w)^2 df): in band (1 - e)^-1 - 1, nil above (1 - e) / 2 dt."""
+    """Return sqrt(T int (Delta S / S_w)^2 df): in band (1 - e)^-1 - 1, nil above (1 - e)/2dt."""
     top = (1.0 - e) / (2 * dt)
     return float(np.sqrt(big_t * (top * (e / (1 - e)) ** 2 + (0.5 / dt - top))))
 
@@ -215,7 +215,7 @@ def oven_energy(n: int, dt: float, onsets: int = 16, phases: int = 8) -> float:
 # --- bias_instability: flicker behind a window re-trim -------------------------------------
 
 def unit_flicker(n: int, dt: float, rng) -> np.ndarray:
-    """Return a unit-variance sum of first-order Gauss-Markov processes at TRIM_TAUS, stationary."""
+    """Return a stationary unit-variance sum of first-order Gauss-Markov processes (TRIM_TAUS)."""
     out = np.zeros(n)
     for tc in TRIM_TAUS:
         a = math.exp(-dt / tc)
@@ -263,7 +263,7 @@ def block_avar(y: np.ndarray, dt: float, tau: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=4)
 def retrim_avar_unit(n: int, dt: float) -> np.ndarray:
-    """Return the re-trimmed unit flicker's Allan variance at ``allan_taus`` (reference records)."""
+    """Return the re-trimmed unit flicker's Allan variance at ``allan_taus`` (reference runs)."""
     tau = allan_taus(dt, n * dt)
     blk = 10
     acc = 0.0
@@ -341,7 +341,7 @@ def two_speed_read(x: np.ndarray, cycle: float, dt: float, rng) -> np.ndarray:
 
 
 def ambiguity_moment() -> float:
-    """Return E[round(AMBIG g)^2], g standard normal: the whole-cycle errors' variance / cycle^2."""
+    """Return E[round(AMBIG g)^2], g standard normal: the whole-cycle errors' variance/cycle^2."""
     k = np.arange(-12, 13)
     p = special.ndtr((k + 0.5) / AMBIG) - special.ndtr((k - 0.5) / AMBIG)
     return float(np.sum(k * k * p))

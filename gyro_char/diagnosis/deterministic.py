@@ -43,7 +43,7 @@ def mean_term(spec: ModelSpectrum, n: int) -> np.ndarray:
 
 
 def cycle_at(spec: ModelSpectrum, t: np.ndarray) -> np.ndarray:
-    """The cycle's sinusoids at output times ``t``, times its envelope (``cycle_envelope``)."""
+    """Return the cycle's sinusoids at output times ``t``, times its envelope."""
     u = np.asarray(t, dtype=np.float64) + spec.time_shift
     out = sum(amp * np.sin(2.0 * np.pi * u / period + phase)
               for amp, period, phase in spec.cycles)

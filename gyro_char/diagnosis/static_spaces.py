@@ -354,7 +354,7 @@ def cycle_space(cycle: CycleStart) -> EffectSpace:
 
 def cycle_onset_space(cycle: CycleStart, length: float) -> EffectSpace:
     """
-    The cycle of ``cycle_space`` switched on at ``t0_s``, its amplitude ramping over ``rise_s``.
+    Return the cycle of ``cycle_space`` switched on at ``t0_s``, ramping over ``rise_s``.
 
     An HVAC turned on mid-record, a loop gone unstable whose cycle grows to a limit: the
     record's least-squares amplitudes average the envelope, so each is searched up to 6

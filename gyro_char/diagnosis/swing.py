@@ -25,8 +25,9 @@ from gyro_char.diagnosis.engine import Problem
 from gyro_char.diagnosis.swing_baseline import fit_baseline, pooled_scale_factor, SwingBaseline
 from gyro_char.diagnosis.swing_calibrate import (
     calibrate_encoder, calibrate_n, calibration_shifts, with_calibration_error)
-from gyro_char.diagnosis.swing_expect import EffectParts, pseudo_twin
+from gyro_char.diagnosis.swing_expect import EffectParts
 from gyro_char.diagnosis.swing_obs import layout, raw_parts, UNITS
+from gyro_char.diagnosis.swing_pseudo import pseudo_twin
 from gyro_char.diagnosis.swing_rate_noise import with_rate_noise
 from gyro_char.diagnosis.swing_spaces import (
     probe_twins, signs, swing_spaces, unresolved_pairs, with_saturation, with_stamp_band,

@@ -50,7 +50,7 @@ class SwingBaseline:
 
     @property
     def stall_trace(self) -> np.ndarray:
-        """The stamp latency a twin's stall form carries: the record's, or none (no stalls)."""
+        """Return the stamp latency a twin's stall form carries: the record's, or none."""
         return np.zeros(0) if self.stamp_latency is None else self.stamp_latency
 
     @property

@@ -38,7 +38,7 @@ from typing import Callable, Dict, List, Sequence, Tuple
 from gyro_char.diagnosis.swing_baseline import SwingBaseline
 from gyro_char.diagnosis.swing_gains import (
     clean_config, lag_gain, limit_gain, limits_of, noise_config, span)
-from gyro_char.diagnosis.swing_obs import finish, raw_parts
+from gyro_char.diagnosis.swing_obs import raw_parts
 from gyro_char.diagnosis.swing_rate_noise import (
     gate_grid, gate_weights, PLAIN_OFF, rate_noise_gain, split, unit_level)
 from gyro_char.diagnosis.swing_residuals import common_samples, residuals
@@ -394,29 +394,3 @@ def jitter_shape(params: dict) -> dict:
     if not tau:
         return {}
     return {'tau_s': tau, **({'order': 2.0} if float(params.get('order', 1.0)) == 2.0 else {})}
-
-
-def combine(noise: dict, parts: Sequence[dict]) -> dict:
-    """
-    Return a pseudo-twin's raw parts: its noise twin's plus the effect parts (module doc).
-
-    Line peaks: a deterministic part is a line, its squared peak adds; a noise part raises
-    the band's noise, whose largest peak scales with the band's mean power. A colouring
-    (``floor``: its power ratio on the gyro noise alone) removes at most that share of
-    this twin's power, however large its one-realisation estimate.
-    """
-    out = dict(noise)
-    for p in parts:
-        new = {k: out[k] + p[k] for k in LINEAR + QUADRATIC}
-        for k, ratio in p.get('floor', {}).items():
-            new[k] = np.maximum(new[k], out[k] * ratio)
-        if p.get('noise'):
-            new['line2'] = out['line2'] * new['mean2'] / np.maximum(out['mean2'], 1e-300)
-        out.update(new)
-    return out
-
-
-def pseudo_twin(noise: dict, parts: Sequence[dict]) -> dict:
-    """Observables of a pseudo-twin (``finish`` of ``combine``) and its scale."""
-    raw = combine(noise, parts)
-    return finish(raw), float(raw['scale'])

@@ -15,9 +15,8 @@ stamps carry the record's own latency trace, ``stall_latency`` laid on the twin 
 ``twin_latency``, times a fitted gain). A run whose gaps are losses (the stamps resume on
 the grid) is not flagged.
 """
-from typing import Optional
 from dataclasses import replace
-from typing import List, Sequence
+from typing import List, Optional, Sequence
 
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.swing_baseline import stamp_grid, SwingBaseline
@@ -136,8 +135,8 @@ def stall_warning(label: str, screen: dict) -> Optional[str]:
             f'{screen["max_latency_s"]:.3g} s): a host that stamps samples when it reads '
             'them and stalls: a delay that varies along the run. The gyro angle across each '
             'burst is off by the rate change times the latency; the run was calibrated at '
-            'its samples\' own instants and offered the delay\'s stall form (time_delay '
-            'stall_gain: the twins\' stamps carry this latency). Stamp the samples at the '
+            "its samples' own instants and offered the delay's stall form (time_delay "
+            "stall_gain: the twins' stamps carry this latency). Stamp the samples at the "
             'sensor or in the driver; see "per_record" imu_stalls')
 
 

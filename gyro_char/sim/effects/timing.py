@@ -43,13 +43,13 @@ class TimeDelay(Effect):
                'stall_gain > 0: the stamps also carry stall_gain times a host latency trace '
                'given to the run (``simulate_swing(stamp_latency=...)``, one value a sample, '
                's): a host that stamps each sample when it reads it and now and then stalls, '
-               'its backlog stamped late in a burst (the trace measured off a record\'s own '
+               "its backlog stamped late in a burst (the trace measured off a record's own "
                'stamps; 1: the samples were taken on time and only stamped late).')
     PARAMS = {'delay_s': (1.0e-3, 's', 'total latency: stamp shift plus the lag'),
               'lag_s': (0.0, 's', 'part of delay_s that is a one-pole gyro lag (>= 0)'),
               'table_rads': (0.0, 'rad/s', 'range of the speed-dependent latency (0: none)'),
               **table_params('d', SPEED_ORDERS, 's', 'speed-dependent latency'),
-              'stall_gain': (0.0, '1', 'share of the run\'s stamp-latency trace in the stamps')}
+              'stall_gain': (0.0, '1', "share of the run's stamp-latency trace in the stamps")}
 
     def check(self):
         if self.lag_s < 0 or self.table_rads < 0 or self.stall_gain < 0:
