@@ -133,18 +133,18 @@ def _det_welch(spec: ModelSpectrum, g, slope: float) -> np.ndarray:
                 shapes.append(warmup_at(spec, t0[s] + j * g.dt, amp, tau, start))
         coef.append(a)
         shapes.append(np.exp(-j * g.dt / tau))
-    # A cycle's envelope is 1 over most segments, 0 over those before its start; the few it
-    # rises in are terms of their own, with the cycle's own values.
-    start = cycle_envelope(t0 + spec.time_shift, *spec.cycle_onset)
-    end = cycle_envelope(t0 + (L - 1) * g.dt + spec.time_shift, *spec.cycle_onset)
-    on = (start >= 1.0).astype(np.float64)
-    for amp, period, phase in spec.cycles:
-        # sin(w (t_s + j dt) + phase) = sin(theta_s) cos(w j dt) + cos(theta_s) sin(w j dt)
-        w_rad = 2.0 * np.pi / period
-        theta = w_rad * (t0 + spec.time_shift) + phase
-        coef += [on * amp * np.sin(theta), on * amp * np.cos(theta)]
-        shapes += [np.cos(w_rad * j * g.dt), np.sin(w_rad * j * g.dt)]
     if spec.cycles:
+        # A cycle's envelope is 1 over most segments, 0 over those before its start; the few
+        # it rises in are terms of their own, with the cycle's own values.
+        start = cycle_envelope(t0 + spec.time_shift, *spec.cycle_onset)
+        end = cycle_envelope(t0 + (L - 1) * g.dt + spec.time_shift, *spec.cycle_onset)
+        on = (start >= 1.0).astype(np.float64)
+        for amp, period, phase in spec.cycles:
+            # sin(w (t_s + j dt) + phase) = sin(theta_s) cos(w j dt) + cos(theta_s) sin(w j dt)
+            w_rad = 2.0 * np.pi / period
+            theta = w_rad * (t0 + spec.time_shift) + phase
+            coef += [on * amp * np.sin(theta), on * amp * np.cos(theta)]
+            shapes += [np.cos(w_rad * j * g.dt), np.sin(w_rad * j * g.dt)]
         for k in np.flatnonzero((start < 1.0) & (end > 0.0)):
             coef.append(np.where(np.arange(nseg) == k, 1.0, 0.0))
             shapes.append(cycle_at(spec, t0[k] + j * g.dt))

@@ -96,11 +96,11 @@ def swing_records_problem(records: Sequence[Tuple[Recording, Recording, float]],
         raise InputError(f'unknown swing method {method!r}: expected or twins')
     records = [(*_cut(i, e, max_samples), float(p)) for i, e, p in records]
     fitted = bases is None
-    # A record whose stamps show host stalls is calibrated at its samples' own instants
-    # (``swing_stalls``); its observables stay the record's.
-    traces = [stall_latency(imu.t) for imu, _, _ in records]
-    own = [destalled(imu, tr) for (imu, _, _), tr in zip(records, traces)]
     if fitted:
+        # A record whose stamps show host stalls is calibrated at its samples' own instants
+        # (``swing_stalls``); its observables stay the record's.
+        traces = [stall_latency(imu.t) for imu, _, _ in records]
+        own = [destalled(imu, tr) for (imu, _, _), tr in zip(records, traces)]
         bases = [fit_baseline(i, e, p, axis) for i, (_, e, p) in zip(own, records)]
         sf = pooled_scale_factor(bases)[0] if scale_factor is None else float(scale_factor)
         bases = [replace(b, scale_factor_error=sf) for b in bases]

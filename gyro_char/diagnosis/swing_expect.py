@@ -96,9 +96,7 @@ class EffectParts:
         if key not in self.cache:
             if len(self.cache) > 4096:
                 self.cache = {k: v for k, v in self.cache.items() if 'unit' in k[1]}
-            if (i, span_s, full) not in self.clean:
-                self.clean[(i, span_s, full)] = self._run(i, [], span_s, full=full)
-            res0, s0 = self.clean[(i, span_s, full)]
+            res0, s0 = self._clean(i, span_s, full)
             res, s = self._run(i, effects, span_s, full=full, gain=gain)
             part = self._difference(i, res0, res, cross=full or not noise)
             part['scale'] = s - s0
@@ -106,6 +104,12 @@ class EffectParts:
                 part = self._as_noise(i, part, span_s)
             self.cache[key] = part
         return self.cache[key]
+
+    def _clean(self, i: int, span_s: float, full: bool = False):
+        """Return the run of record ``i`` without effects over ``span_s`` (cached), its scale."""
+        if (i, span_s, full) not in self.clean:
+            self.clean[(i, span_s, full)] = self._run(i, [], span_s, full=full)
+        return self.clean[(i, span_s, full)]
 
     def _difference(self, i: int, res0, res, cross: bool = False) -> dict:
         # Sample by sample: the same sample numbers of both runs (a stamp shift may drop
@@ -167,10 +171,11 @@ class EffectParts:
             # The motion part on each run's own stamps: read on the plain run's (as
             # ``_difference`` does, right for a latency that only shifts them) the stall's
             # residual came out 3 times its power.
-            res0, s0 = self._run(i, [], LIMIT_SPAN_S)
+            res0, s0 = self._clean(i, LIMIT_SPAN_S)
             res, s = self._run(i, stalls, LIMIT_SPAN_S)
-            own, plain = raw_parts(res, self.ranges[i]), raw_parts(res0, self.ranges[i])
-            motion = {**own, **{q: own[q] - plain[q] for q in LINEAR + QUADRATIC if q in own},
+            own = raw_parts(res, self.ranges[i])
+            base = res0.geometry('own_parts', lambda: raw_parts(res0, self.ranges[i]))
+            motion = {**own, **{q: own[q] - base[q] for q in LINEAR + QUADRATIC if q in own},
                       'scale': s - s0}
             stalled = self._noise_alone(i, stalls, span_s=LIMIT_SPAN_S)
             plain = self._noise_alone(i, [], span_s=LIMIT_SPAN_S)

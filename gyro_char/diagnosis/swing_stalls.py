@@ -16,7 +16,7 @@ stamps carry the record's own latency trace, ``stall_latency`` laid on the twin 
 the grid) is not flagged.
 """
 from dataclasses import replace
-from typing import List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 from gyro_char.diagnosis.fit import EffectSpace, Param
 from gyro_char.diagnosis.swing_baseline import stamp_grid, SwingBaseline
@@ -39,26 +39,36 @@ def stall_screen(t: np.ndarray) -> dict:
     say were dropped), ``stalls`` (runs of late stamps), ``late_share``, ``mean_latency_s``
     (over the whole run), ``max_latency_s`` and ``flagged`` (gaps whose samples came late).
     """
+    return _screen(t)[0]
+
+
+def _screen(t: np.ndarray) -> Tuple[dict, Optional[np.ndarray]]:
+    """Return the stall screen of ``t`` and each stamp's latency off its grid (None: untested)."""
     t = np.asarray(t, dtype=np.float64)
     if t.size < MIN_SAMPLES or not np.all(np.isfinite(t)):
         return {'tested': False,
-                'reason': f'{t.size} stamps, need {MIN_SAMPLES} finite ones'}
+                'reason': f'{t.size} stamps, need {MIN_SAMPLES} finite ones'}, None
     d = np.diff(t)
     med = float(np.median(d))
     if not med > 0:
-        return {'tested': False, 'reason': 'the stamps do not advance'}
+        return {'tested': False, 'reason': 'the stamps do not advance'}, None
     gaps = int(np.count_nonzero(d > GAP_RELEASE_FACTOR * med))
-    k, dt = stamp_grid(t)
+    k, dt, g0 = _grid(t)
     lost = int(round(k[-1])) - (t.size - 1)
-    res = t - dt * k
-    latency = res - float(np.median(res))
+    latency = t - g0 - dt * k
     late = latency > LATE_STEPS * dt
     stalls = int(np.count_nonzero(np.diff(late.astype(np.int8), prepend=0) == 1))
     return {'tested': True, 'gaps': gaps, 'samples_lost': lost, 'stalls': stalls,
             'late_share': float(late.mean()),
             'mean_latency_s': float(np.mean(np.where(late, latency, 0.0))),
             'max_latency_s': float(max(latency.max(), 0.0)),
-            'flagged': bool(gaps and not lost and stalls)}
+            'flagged': bool(gaps and not lost and stalls)}, latency
+
+
+def _grid(t: np.ndarray) -> Tuple[np.ndarray, float, float]:
+    """Return the stamps' sample numbers, interval and grid origin (the median departure)."""
+    k, dt = stamp_grid(t)
+    return k, dt, float(np.median(t - dt * k))
 
 
 def stall_latency(t: np.ndarray) -> Optional[np.ndarray]:
@@ -72,15 +82,12 @@ def stall_latency(t: np.ndarray) -> Optional[np.ndarray]:
     stamps moved back by it would not be in order: a latency that is not a backlog drained
     behind a stall (set AG's playout buffer at its strong level: 44 stamps out of order).
     """
-    if not stall_screen(t).get('flagged'):
+    screen, latency = _screen(t)
+    if not screen.get('flagged'):
         return None
-    t = np.asarray(t, dtype=np.float64)
-    k, dt = stamp_grid(t)
-    res = t - dt * k
-    latency = res - float(np.median(res))
     floor = JITTER_MADS * float(np.median(np.abs(latency)))
     latency = np.where(latency > floor, latency, 0.0)
-    return latency if np.all(np.diff(t - latency) > 0) else None
+    return latency if np.all(np.diff(np.asarray(t, dtype=np.float64) - latency) > 0) else None
 
 
 def destalled(imu: Recording, latency: Optional[np.ndarray]) -> Recording:
@@ -102,8 +109,7 @@ def twin_latency(latency: np.ndarray, imu_t: np.ndarray, enc_t: np.ndarray,
     the twin's own (``twin_phase``) at its time 0, the shift taken within half a period and
     rounded to whole samples. Samples of the twin the record has no trace for get none.
     """
-    k, dt = stamp_grid(imu_t)
-    g0 = float(np.median(imu_t - dt * k))
+    _, dt, g0 = _grid(imu_t)
     t_ov = max(float(imu_t[0]), float(enc_t[0]))
     w = 2.0 * np.pi / period_s
     u = enc_t - t_ov
